@@ -1,0 +1,205 @@
+"""One assistance step: inference, confidence, arbitration and policy blending.
+
+The :class:`Assistant` is fed the arm's state as the trajectory unfolds. At each
+inference step (twice per second in the original, every ``dt``) it updates, per
+intent, the prefix cost incrementally, the optimal cost-to-go and the
+suboptimality, then beta_hat, the belief over intents, the most likely intent
+theta*, the user's control authority alpha, and whether the intent set looks
+misspecified. At every control tick :meth:`Assistant.act` blends the user's
+action with the robot's action u*, which tracks the cached optimal trajectory
+to theta* (replanned when theta* changes). The cost of a step is O(number of
+intents), independent of the steps so far.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from casa_core.arbitration import alpha_belief, alpha_confidence, alpha_distance, blend
+from casa_core.confidence import beta_hat, suboptimality
+from casa_core.inference import log_likelihood, posterior
+from casa_core.intents import Intent
+
+ARBITRATIONS = ("confidence", "distance", "belief", "none")
+
+
+@dataclass(frozen=True)
+class Inference:
+    """What the assistant concluded at one inference step.
+
+    Attributes
+    ----------
+    t : float
+        Seconds since the trial started.
+    beta : dict
+        beta_hat per intent name (the beta used for inference is 1 under PBA).
+    belief : dict
+        P(theta | xi) per intent name.
+    suboptimality : dict
+        Scaled suboptimality per intent name.
+    intent : str
+        The most likely intent theta*.
+    alpha : float
+        The user's control authority under the assistant's arbitration.
+    alpha_by_arbitration : dict
+        alpha that each arbitration ("confidence", "distance", "belief") would
+        give for the same theta*, for comparing them on one trajectory.
+    misspecified : bool
+        True when evidence has been seen and every beta_hat is below epsilon.
+    """
+
+    t: float
+    beta: dict
+    belief: dict
+    suboptimality: dict
+    intent: str
+    alpha: float
+    alpha_by_arbitration: dict = field(default_factory=dict)
+    misspecified: bool = False
+
+
+class Assistant:
+    """Confidence-aware shared autonomy over a set of intents.
+
+    Parameters
+    ----------
+    intents : sequence of Intent
+        The known intents Theta; names must be unique.
+    arbitration : {"confidence", "distance", "belief", "none"}
+        "confidence" is CASA (alpha = min(1, 1/beta_hat*)); "distance" is the
+        policy-blending baseline PBA (beta fixed at 1, alpha = min(1, d/D));
+        "belief" arbitrates on P(theta*|xi); "none" is direct teleoperation (NA).
+    k : int
+        Action dimensionality (7 joint velocities).
+    lam : float
+        Exponential prior rate on beta (MAP estimate; the original used 4).
+    epsilon : float
+        Misspecification threshold on beta_hat (1.0 as in related work, NOTES).
+    pba_distance : float
+        D of distance arbitration, metres (0.55 in the original).
+    subopt_scale : float
+        Factor applied to suboptimality before use (the original divides by 1.8).
+    horizon : float
+        T, the episode horizon in seconds (15 in the original).
+    dt : float
+        Seconds between inference steps and trajectory states (0.5).
+    speed, rot_speed : float
+        Limits of the robot action u*: m/s for the position, rad/s for rot.
+    """
+
+    def __init__(
+        self,
+        intents,
+        arbitration: str = "confidence",
+        k: int = 7,
+        lam: float = 4.0,
+        epsilon: float = 1.0,
+        pba_distance: float = 0.55,
+        subopt_scale: float = 1 / 1.8,
+        horizon: float = 15.0,
+        dt: float = 0.5,
+        speed: float = 0.05,
+        rot_speed: float = 0.5,
+    ):
+        if arbitration not in ARBITRATIONS:
+            raise ValueError(f"arbitration must be one of {ARBITRATIONS}, got {arbitration!r}")
+        self.intents = list(intents)
+        names = [intent.name for intent in self.intents]
+        if not names:
+            raise ValueError("the assistant needs at least one intent")
+        if len(set(names)) != len(names):
+            raise ValueError(f"intent names must be unique, got {names}")
+        self.arbitration = arbitration
+        self.k = k
+        self.lam = lam
+        self.epsilon = epsilon
+        self.pba_distance = pba_distance
+        self.subopt_scale = subopt_scale
+        self.horizon = horizon
+        self.dt = dt
+        self.speed = speed
+        self.rot_speed = rot_speed
+        self.names = names
+
+    def reset(self, state) -> None:
+        """Start a trial at ``state``: no evidence, costs measured from here."""
+        state = np.asarray(state, dtype=float)
+        self._steps = 0
+        self._last_state = state
+        self._prefix = np.zeros(len(self.intents))
+        self._optimal = np.array([i.cost_to_go(state, self.horizon) for i in self.intents])
+        self._plan = None  # cached optimal trajectory to theta*, one state per step
+        self._plan_intent = None
+        self._plan_origin = 0  # inference step at which the plan starts
+        self.latest = None
+
+    def update(self, state) -> Inference:
+        """Observe the state reached one inference step (``dt``) after the last one."""
+        state = np.asarray(state, dtype=float)
+        if not np.isfinite(state).all():
+            raise ValueError(f"state must be finite, got {state!r}")
+        self._steps += 1
+        t = self._steps
+        time_left = max(self.horizon - t * self.dt, 0.0)
+        for j, intent in enumerate(self.intents):
+            self._prefix[j] += intent.step_cost(self._last_state, state)
+        self._last_state = state
+        to_go = np.array([i.cost_to_go(state, time_left) for i in self.intents])
+        subopt = self.subopt_scale * suboptimality(self._prefix, to_go, self._optimal)
+        betas = beta_hat(subopt, t, self.k, self.lam)
+        inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
+        belief = posterior(log_likelihood(subopt, inference_beta, t, self.k))
+        star = int(np.argmax(belief))
+        alphas = {
+            "confidence": float(alpha_confidence(betas[star])),
+            "distance": float(
+                alpha_distance(self.intents[star].distance(state), self.pba_distance)
+            ),
+            "belief": float(alpha_belief(belief[star], len(self.intents)))
+            if len(self.intents) > 1
+            else 0.0,
+        }
+        alpha = 1.0 if self.arbitration == "none" else alphas[self.arbitration]
+        if star != self._plan_intent:
+            self._plan = self.intents[star].optimal_trajectory(state, time_left)
+            self._plan_intent = star
+            self._plan_origin = t
+        self.latest = Inference(
+            t=t * self.dt,
+            beta=dict(zip(self.names, betas.tolist(), strict=True)),
+            belief=dict(zip(self.names, belief.tolist(), strict=True)),
+            suboptimality=dict(zip(self.names, np.atleast_1d(subopt).tolist(), strict=True)),
+            intent=self.names[star],
+            alpha=alpha,
+            alpha_by_arbitration=alphas,
+            misspecified=bool((betas < self.epsilon).all()),
+        )
+        return self.latest
+
+    def robot_action(self, state, elapsed_in_step: float = 0.0) -> np.ndarray:
+        """u*: velocity toward the cached plan's next state, within the speed limits."""
+        state = np.asarray(state, dtype=float)
+        if self._plan is None:
+            return np.zeros_like(state)
+        index = min(self._steps - self._plan_origin + 1, len(self._plan) - 1)
+        target = self._plan[index]
+        remaining = max(self.dt - elapsed_in_step, self.dt / 10)
+        velocity = (target - state) / remaining
+        norm = np.linalg.norm(velocity[:3])
+        if norm > self.speed:
+            velocity[:3] *= self.speed / norm
+        velocity[3] = np.clip(velocity[3], -self.rot_speed, self.rot_speed)
+        return velocity
+
+    def act(self, state, user_action, elapsed_in_step: float = 0.0) -> np.ndarray:
+        """The blended action alpha T(a) + (1 - alpha) u*, applied even with no key held.
+
+        Before the first inference step the user has full control.
+        """
+        user_action = np.asarray(user_action, dtype=float)
+        if self.latest is None:
+            return user_action.copy()
+        robot = self.robot_action(state, elapsed_in_step)
+        return blend(self.latest.alpha, user_action, robot)

@@ -1,0 +1,148 @@
+"""Intents as cost functions (paper, Sec. II-A).
+
+An intent is what the user may want the robot to do, represented by a cost over
+trajectories of the arm's state ``[x, y, z, rot]`` (end-effector position in the
+robot base frame, metres, and the angle driven by the rotate keys, radians),
+sampled every ``dt`` seconds. Inference needs three things of an intent: the
+cost of the observed prefix (additive, so it can be kept incrementally), the
+optimal cost-to-go from a state with the time left, and the optimal trajectory
+that the robot assists along.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+COST_FORMS = ("path_length", "distance_sum")
+
+
+class Intent(ABC):
+    """A cost function over trajectories of states ``[x, y, z, rot]`` sampled every ``dt``.
+
+    Subclasses implement :meth:`step_cost`, :meth:`cost_to_go`,
+    :meth:`optimal_trajectory` and :meth:`distance`.
+    """
+
+    name: str
+    dt: float
+
+    @abstractmethod
+    def step_cost(self, state_from: np.ndarray, state_to: np.ndarray) -> float:
+        """Cost of one step; the cost of a prefix is the sum of its steps."""
+
+    def prefix_cost(self, states: np.ndarray) -> float:
+        """C(xi_{0->t}) of the observed states ``(n, 4)``, the first being the start."""
+        states = np.asarray(states, dtype=float)
+        return float(sum(self.step_cost(a, b) for a, b in zip(states[:-1], states[1:])))
+
+    @abstractmethod
+    def cost_to_go(self, state: np.ndarray, time_left: float) -> float:
+        """C(xi*_{t->T}): the optimal cost from ``state`` with ``time_left`` seconds left."""
+
+    @abstractmethod
+    def optimal_trajectory(self, state: np.ndarray, time_left: float) -> np.ndarray:
+        """xi*_{t->T}: states ``(n, 4)`` every ``dt`` from ``state`` (included) to the horizon."""
+
+    @abstractmethod
+    def distance(self, state: np.ndarray) -> float:
+        """Distance (m) from the end effector to where the intent ends; PBA arbitrates with it."""
+
+
+class GoalIntent(Intent):
+    """Reaching a goal position with the end effector, at most ``speed`` m/s.
+
+    Two cost forms, chosen with ``cost``:
+
+    ``"path_length"`` (the original implementation's, NOTES section 1)
+        C(xi) = scale * (sum of ||x_{i+1} - x_i||) + final_weight * ||x_N - g||:
+        the end-effector path length plus a penalty on the distance left at the
+        horizon. The optimum drives straight at ``speed``; its cost-to-go from
+        distance d with time tau left is
+        ``scale * min(d, v tau) + final_weight * max(d - v tau, 0)``.
+    ``"distance_sum"`` (the paper's, Sec. II-A)
+        C(xi) = scale * dt * sum_i ||x_i - g|| over the states after the start,
+        i.e. the time integral of the distance to the goal. The optimum drives
+        straight at ``speed`` (step s = v dt) and waits at the goal; with n steps
+        left and m = min(n, floor(d / s)) its cost-to-go is
+        ``scale * dt * (m d - s m (m + 1) / 2)``.
+
+    Only the position counts; the rotation is held.
+
+    Parameters
+    ----------
+    name : str
+        Intent name (e.g. ``"green"``).
+    goal : array_like, shape (3,)
+        Goal position in the robot base frame, metres.
+    cost : {"path_length", "distance_sum"}
+    speed : float
+        Fastest end-effector speed the optimum may use, m/s (the keyboard's 0.05).
+    dt : float
+        Seconds between trajectory states (0.5 in the original).
+    scale : float
+        Cost per metre (path_length; the original's ~227) or per metre-second
+        (distance_sum).
+    final_weight : float, optional
+        Cost per metre left at the horizon (path_length); default ``2 * scale``
+        (our choice: the original's value is not known).
+    """
+
+    def __init__(
+        self,
+        name: str,
+        goal,
+        cost: str = "path_length",
+        speed: float = 0.05,
+        dt: float = 0.5,
+        scale: float = 227.0,
+        final_weight: float | None = None,
+    ):
+        if cost not in COST_FORMS:
+            raise ValueError(f"cost must be one of {COST_FORMS}, got {cost!r}")
+        goal = np.asarray(goal, dtype=float)
+        if goal.shape != (3,) or not np.isfinite(goal).all():
+            raise ValueError(f"goal of intent {name!r} must be 3 finite numbers, got {goal!r}")
+        for key, value in (("speed", speed), ("dt", dt), ("scale", scale)):
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{key} of intent {name!r} must be positive, got {value!r}")
+        self.name = name
+        self.goal = goal
+        self.cost = cost
+        self.speed = float(speed)
+        self.dt = float(dt)
+        self.scale = float(scale)
+        self.final_weight = 2.0 * self.scale if final_weight is None else float(final_weight)
+
+    def __repr__(self) -> str:
+        return f"GoalIntent({self.name!r}, goal={self.goal.tolist()}, cost={self.cost!r})"
+
+    def step_cost(self, state_from, state_to) -> float:
+        if self.cost == "path_length":
+            return self.scale * float(np.linalg.norm(state_to[:3] - state_from[:3]))
+        return self.scale * self.dt * float(np.linalg.norm(state_to[:3] - self.goal))
+
+    def cost_to_go(self, state, time_left: float) -> float:
+        d = float(np.linalg.norm(np.asarray(state[:3], dtype=float) - self.goal))
+        time_left = max(float(time_left), 0.0)
+        if self.cost == "path_length":
+            reach = self.speed * time_left
+            return self.scale * min(d, reach) + self.final_weight * max(d - reach, 0.0)
+        n = int(np.floor(time_left / self.dt + 1e-9))
+        step = self.speed * self.dt
+        m = min(n, int(np.floor(d / step + 1e-12)))
+        return self.scale * self.dt * (m * d - step * m * (m + 1) / 2.0)
+
+    def optimal_trajectory(self, state, time_left: float) -> np.ndarray:
+        state = np.asarray(state, dtype=float)
+        n = int(np.floor(max(float(time_left), 0.0) / self.dt + 1e-9))
+        offset = self.goal - state[:3]
+        d = float(np.linalg.norm(offset))
+        travelled = np.minimum(self.speed * self.dt * np.arange(n + 1), d)
+        direction = offset / d if d > 0 else np.zeros(3)
+        positions = state[:3] + travelled[:, None] * direction
+        return np.column_stack([positions, np.full(n + 1, state[3])])
+
+    def distance(self, state) -> float:
+        return float(np.linalg.norm(np.asarray(state[:3], dtype=float) - self.goal))

@@ -1,0 +1,154 @@
+"""Goal intents and the assistant: closed forms and the behaviour the paper describes.
+
+Closed forms are derived in the GoalIntent docstring; each test states the arithmetic.
+"""
+
+import numpy as np
+import pytest
+
+from casa_core.assistant import Assistant
+from casa_core.intents import GoalIntent
+
+START = np.array([0.0, 0.0, 0.0, 0.0])
+GOAL = np.array([0.3, 0.4, 0.0])  # 0.5 m from START
+
+
+def straight_line(goal, n_steps, speed=0.05, dt=0.5, start=START):
+    """States every dt along the straight line at full speed, stopping at the goal."""
+    offset = goal - start[:3]
+    d = np.linalg.norm(offset)
+    travelled = np.minimum(speed * dt * np.arange(n_steps + 1), d)
+    positions = start[:3] + travelled[:, None] * offset / d
+    return np.column_stack([positions, np.zeros(n_steps + 1)])
+
+
+@pytest.mark.parametrize("cost", ["path_length", "distance_sum"])
+def test_straight_line_to_the_goal_has_zero_suboptimality(cost):
+    intent = GoalIntent("g", GOAL, cost=cost)
+    horizon = 15.0
+    optimal = intent.cost_to_go(START, horizon)
+    states = straight_line(GOAL, 30)
+    for t in range(1, 31):
+        prefix = intent.prefix_cost(states[: t + 1])
+        to_go = intent.cost_to_go(states[t], horizon - 0.5 * t)
+        assert prefix + to_go - optimal == pytest.approx(0.0, abs=1e-9)
+
+
+def test_path_length_closed_forms():
+    intent = GoalIntent("g", GOAL, cost="path_length", scale=227.0, final_weight=500.0)
+    # reachable: 0.5 m at 0.05 m/s needs 10 s <= 15 s -> 227 * 0.5
+    assert intent.cost_to_go(START, 15.0) == pytest.approx(113.5)
+    # 4 s left reaches 0.2 m: 227 * 0.2 + 500 * 0.3
+    assert intent.cost_to_go(START, 4.0) == pytest.approx(45.4 + 150.0)
+
+
+def test_distance_sum_closed_form_matches_its_optimal_trajectory():
+    intent = GoalIntent("g", GOAL, cost="distance_sum", scale=1.0)
+    # step s = 0.025 m, d = 0.5 m: m = 20 steps -> dt * (20 * 0.5 - 0.025 * 20 * 21 / 2)
+    assert intent.cost_to_go(START, 15.0) == pytest.approx(0.5 * (10.0 - 5.25))
+    # and the cost summed along the optimal trajectory agrees, also when time runs out
+    for time_left in (15.0, 4.0, 0.0):
+        trajectory = intent.optimal_trajectory(START, time_left)
+        assert intent.prefix_cost(trajectory) == pytest.approx(intent.cost_to_go(START, time_left))
+
+
+def test_optimal_trajectory_is_the_straight_line_at_speed():
+    intent = GoalIntent("g", GOAL)
+    trajectory = intent.optimal_trajectory(START, 15.0)
+    assert trajectory.shape == (31, 4)  # T = 15 s, dt = 0.5 s: 31 waypoints
+    steps = np.linalg.norm(np.diff(trajectory[:, :3], axis=0), axis=1)
+    assert steps.max() == pytest.approx(0.025)
+    np.testing.assert_allclose(trajectory[-1, :3], GOAL)
+
+
+def test_goal_intent_rejects_bad_parameters():
+    with pytest.raises(ValueError, match="cost must be one of"):
+        GoalIntent("g", GOAL, cost="euclid")
+    with pytest.raises(ValueError, match="goal of intent 'g'"):
+        GoalIntent("g", [0.0, np.nan, 0.0])
+
+
+def make_assistant(arbitration="confidence", **kwargs):
+    intents = [GoalIntent("green", GOAL), GoalIntent("purple", [-0.4, 0.1, 0.2])]
+    assistant = Assistant(intents, arbitration=arbitration, **kwargs)
+    assistant.reset(START)
+    return assistant
+
+
+def test_known_goal_confidence_rises_and_alpha_falls():
+    # Paper Sec. IV-C: moving optimally to a known goal, its beta_hat rises and alpha falls.
+    assistant = make_assistant()
+    steps = [assistant.update(s) for s in straight_line(GOAL, 16)[1:]]
+    green = [step.beta["green"] for step in steps]
+    assert (np.diff(green) > 0).all()
+    assert steps[-1].beta["purple"] < 1.0 < steps[-1].beta["green"]
+    assert all(step.intent == "green" for step in steps)
+    alphas = [step.alpha for step in steps]
+    assert (np.diff(alphas) <= 1e-12).all() and alphas[-1] < 0.2
+    assert not steps[-1].misspecified
+
+
+def test_unknown_goal_is_flagged_misspecified_and_casa_gives_control_back():
+    # Moving to a goal far from both known ones: every beta_hat drops below epsilon.
+    assistant = make_assistant()
+    unknown = np.array([0.0, -0.5, 0.0])
+    steps = [assistant.update(s) for s in straight_line(unknown, 16)[1:]]
+    assert steps[-1].misspecified
+    assert steps[-1].alpha == 1.0
+    # belief arbitration would still hand control to the robot (paper, Fig. alpha_methods)
+    assert steps[-1].alpha_by_arbitration["belief"] < steps[-1].alpha
+
+
+def test_pba_fixes_beta_at_one_for_inference_and_arbitrates_on_distance():
+    assistant = make_assistant("distance", pba_distance=0.55)
+    step = None
+    for state in straight_line(GOAL, 10)[1:]:
+        step = assistant.update(state)
+    distance = np.linalg.norm(straight_line(GOAL, 10)[-1, :3] - GOAL)
+    assert step.alpha == pytest.approx(min(1.0, distance / 0.55))
+
+
+def test_no_assistance_leaves_the_user_in_control():
+    assistant = make_assistant("none")
+    for state in straight_line(GOAL, 5)[1:]:
+        assistant.update(state)
+    user = np.array([0.0, 0.05, 0.0, 0.0])
+    np.testing.assert_allclose(assistant.act(straight_line(GOAL, 5)[-1], user), user)
+
+
+def test_blended_action_moves_toward_the_most_likely_goal_when_confident():
+    assistant = make_assistant()
+    states = straight_line(GOAL, 12)
+    for state in states[1:]:
+        assistant.update(state)
+    action = assistant.act(states[-1], np.zeros(4))  # no key held: the robot still assists
+    direction = (GOAL - states[-1, :3]) / np.linalg.norm(GOAL - states[-1, :3])
+    assert action[:3] @ direction > 0
+    assert np.linalg.norm(action[:3]) <= 0.05 + 1e-12
+
+
+def test_assistant_is_incremental_and_matches_batch_costs():
+    # the incremental prefix cost equals the batch prefix cost of the whole trajectory
+    assistant = make_assistant(lam=0.0, subopt_scale=1.0)
+    rng = np.random.default_rng(1)
+    states = np.cumsum(rng.normal(scale=0.02, size=(12, 4)), axis=0)
+    states[0] = START
+    for state in states[1:]:
+        step = assistant.update(state)
+    intent = assistant.intents[0]
+    expected = (
+        intent.prefix_cost(states)
+        + intent.cost_to_go(states[-1], 15.0 - 0.5 * 11)
+        - intent.cost_to_go(START, 15.0)
+    )
+    assert step.suboptimality["green"] == pytest.approx(max(expected, 0.0))
+
+
+def test_assistant_guards():
+    with pytest.raises(ValueError, match="arbitration must be one of"):
+        Assistant([GoalIntent("a", GOAL)], arbitration="magic")
+    with pytest.raises(ValueError, match="unique"):
+        Assistant([GoalIntent("a", GOAL), GoalIntent("a", -GOAL)])
+    assistant = make_assistant()
+    with pytest.raises(ValueError, match="finite"):
+        assistant.update([0.0, np.nan, 0.0, 0.0])
