@@ -35,7 +35,8 @@ class Intent(ABC):
     def prefix_cost(self, states: np.ndarray) -> float:
         """C(xi_{0->t}) of the observed states ``(n, 4)``, the first being the start."""
         states = np.asarray(states, dtype=float)
-        return float(sum(self.step_cost(a, b) for a, b in zip(states[:-1], states[1:])))
+        pairs = zip(states[:-1], states[1:], strict=True)
+        return float(sum(self.step_cost(a, b) for a, b in pairs))
 
     @abstractmethod
     def cost_to_go(self, state: np.ndarray, time_left: float) -> float:

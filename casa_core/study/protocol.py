@@ -1,0 +1,63 @@
+"""The study protocol (paper, Sec. V-A), the same for simulated and real participants.
+
+1. familiarization: one direct-teleoperation trial of the familiarization task;
+2. no misspecification: Known Goal with NA, PBA and CASA;
+3. misspecification before learning: Unknown Goal, then Unknown Skill, each with
+   NA, PBA and CASA; when CASA flags misspecification (every known intent's
+   beta_hat below epsilon) the robot asks for demonstrations: 5 of each unknown
+   task by direct teleoperation;
+4. after learning: Unknown Goal and Unknown Skill with CASA and the learned intents.
+
+The order of the three methods is counterbalanced across participants: participant
+i uses the (i mod 6)-th of the 6 orders of NA, PBA, CASA, for every task.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import permutations
+
+METHODS = ("NA", "PBA", "CASA")
+METHOD_ORDERS = tuple(permutations(METHODS))
+UNKNOWN_TASKS = ("unknown_goal", "unknown_skill")
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """One trial of the protocol; ``repeat`` numbers the demonstrations."""
+
+    task: str
+    method: str
+    phase: str
+    repeat: int = 0
+
+    @property
+    def stem(self) -> str:
+        """File stem of the trial's log, unique within a participant."""
+        suffix = f"_{self.repeat + 1}" if self.phase == "demonstration" else ""
+        return f"{self.task}_{self.phase}_{self.method}{suffix}"
+
+
+def method_order(participant_index: int) -> tuple[str, ...]:
+    """The counterbalanced order of NA, PBA and CASA for a participant (0-based index)."""
+    return METHOD_ORDERS[participant_index % len(METHOD_ORDERS)]
+
+
+def before_learning(participant_index: int) -> list[TrialSpec]:
+    """Phases 1-3 without the demonstrations, in the order they are run."""
+    order = method_order(participant_index)
+    trials = [TrialSpec("familiarization", "NA", "familiarization")]
+    trials += [TrialSpec("known_goal", method, "no_misspecification") for method in order]
+    for task in UNKNOWN_TASKS:
+        trials += [TrialSpec(task, method, "before_learning") for method in order]
+    return trials
+
+
+def demonstrations(task: str, n: int = 5) -> list[TrialSpec]:
+    """The ``n`` demonstrations of an unknown task, by direct teleoperation."""
+    return [TrialSpec(task, "NA", "demonstration", repeat) for repeat in range(n)]
+
+
+def after_learning() -> list[TrialSpec]:
+    """Phase 4: CASA with the learned intents."""
+    return [TrialSpec(task, "CASA", "after_learning") for task in UNKNOWN_TASKS]
