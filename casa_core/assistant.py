@@ -20,7 +20,6 @@ import numpy as np
 from casa_core.arbitration import alpha_belief, alpha_confidence, alpha_distance, blend
 from casa_core.confidence import beta_hat, suboptimality
 from casa_core.inference import log_likelihood, posterior
-from casa_core.intents import Intent
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
 

@@ -135,7 +135,9 @@ def test_posterior_infinite_cases():
 
 
 def test_alpha_confidence():
-    np.testing.assert_array_equal(alpha_confidence([0.0, 0.5, 1.0, 4.0, np.inf]), [1, 1, 1, 0.25, 0])
+    np.testing.assert_array_equal(
+        alpha_confidence([0.0, 0.5, 1.0, 4.0, np.inf]), [1, 1, 1, 0.25, 0]
+    )
 
 
 def test_alpha_distance():

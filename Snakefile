@@ -1,0 +1,36 @@
+# CASA: rebuild every table, statistic and figure from the raw logs.
+#
+#   snakemake --cores all                  # everything
+#   snakemake --cores all --configfile config/ci.yaml
+#   snakemake --config allow_invalid=true  # exclude bad log files instead of stopping
+#   snakemake --report report.html         # one self-contained report
+#
+# Recommended options (keep building other datasets past a bad one, ...) are in
+# workflow/profiles/default. Snakemake picks that folder up by itself only for a
+# workflow/Snakefile, so name it: --workflow-profile workflow/profiles/default.
+# workflow/profiles/slurm runs the same DAG on a Slurm cluster.
+#
+# Datasets are the folders of data/raw/, found when the workflow is parsed: a
+# folder of casa-trial/1 logs dropped there is built on the next run.
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/datasets.smk"
+include: "workflow/rules/stats.smk"
+include: "workflow/rules/figures.smk"
+include: "workflow/rules/study.smk"
+
+
+report: "workflow/report/workflow.rst"
+
+
+rule all:
+    default_target: True
+    input:
+        all_outputs(),

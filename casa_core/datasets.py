@@ -1,0 +1,299 @@
+"""One raw dataset folder in, its processed tables out.
+
+A dataset is a folder of casa-trial/1 logs (``data/raw/<dataset>/``, read only
+through :mod:`casa_core.logs`). It becomes four tables, the contract with users
+(issue 8):
+
+- ``trials.csv``: one row per trial with its metrics (:mod:`casa_core.metrics`),
+  columns :data:`TRIAL_COLUMNS`;
+- ``steps.csv``: one row per tick and intent for trials that logged
+  ``alpha``, ``beta:NAME`` or ``belief:NAME``, columns :data:`STEP_COLUMNS`;
+- ``likert.csv``: every ``surveys.csv`` answer, columns :data:`LIKERT_COLUMNS`;
+- ``validation.csv``: every file checked, its status and each problem,
+  columns :data:`VALIDATION_COLUMNS`.
+
+Rows are sorted on their identifying columns and written with
+:func:`casa_core.logs.frame_to_csv_text`, atomically, so the same raw files give
+the same bytes. Paths in the tables are relative to the dataset folder.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from casa_core import logs, metrics, tasks
+
+TRIAL_COLUMNS = (
+    "dataset",
+    "participant",
+    "task",
+    "method",
+    "phase",
+    "source",
+    "error",
+    "efficiency",
+    "effort",
+    "effort_ticks",
+    "relative_effort",
+    "duration",
+    # Beyond the contract: the rotation error and cost, the original's relative
+    # effort, the number of ticks and the trial's stem, to trace a row to its file.
+    "error_rot",
+    "efficiency_rot",
+    "relative_effort_ticks",
+    "ticks",
+    "trial",
+)
+STEP_COLUMNS = (
+    "participant",
+    "task",
+    "method",
+    "phase",
+    "t",
+    "alpha",
+    "intent",
+    "beta",
+    "belief",
+    "dataset",
+    "trial",
+)
+LIKERT_COLUMNS = (
+    "dataset",
+    "participant",
+    "task",
+    "method",
+    "phase",
+    "question",
+    "score",
+    "source",
+)
+VALIDATION_COLUMNS = ("file", "kind", "status", "rule", "where", "message")
+CONDITION = ["participant", "task", "method", "phase"]
+
+
+class DatasetInvalid(ValueError):
+    """A dataset has bad files; ``problems`` lists every problem in all of them."""
+
+    def __init__(self, dataset: str, problems: list[logs.Problem]):
+        self.dataset = dataset
+        self.problems = problems
+        lines = "\n".join(f"  {p}" for p in problems)
+        super().__init__(
+            f"dataset {dataset!r}: {len(problems)} problem(s) in "
+            f"{len({p.file for p in problems})} file(s); fix them or rerun with "
+            f"allow_invalid=true to exclude those files:\n{lines}"
+        )
+
+
+@dataclass
+class DatasetTables:
+    """The processed tables of one dataset."""
+
+    trials: pd.DataFrame
+    steps: pd.DataFrame
+    likert: pd.DataFrame
+    validation: pd.DataFrame
+
+
+def _relative(path: Path, root: Path) -> str:
+    try:
+        return path.relative_to(root).as_posix()
+    except ValueError:
+        return path.as_posix()
+
+
+def validation_table(
+    checks: list[logs.FileCheck], root: Path, allow_invalid: bool = False
+) -> pd.DataFrame:
+    """Every checked file with its status: ``ok``, ``ignored`` (not a log), ``invalid``
+    (stops the build) or ``excluded`` (with ``allow_invalid``); one row per problem.
+    """
+    rows = []
+    for check in checks:
+        file = _relative(check.file, root)
+        if check.kind == "other":
+            rows.append((file, check.kind, "ignored", "", "", "not a .csv or .json: not read"))
+        elif check.ok:
+            rows.append((file, check.kind, "ok", "", "", ""))
+        else:
+            status = "excluded" if allow_invalid else "invalid"
+            for problem in check.problems:
+                where = problem.where
+                if _relative(Path(problem.file), root) != file:
+                    # The problem is in the trial's other file (its .json).
+                    where = f"{_relative(Path(problem.file), root)}: {where}".rstrip(": ")
+                rows.append((file, check.kind, status, problem.rule, where, problem.message))
+    return pd.DataFrame(rows, columns=list(VALIDATION_COLUMNS))
+
+
+def check_dataset(raw_dir: Path | str) -> list[logs.FileCheck]:
+    """Check every file of a dataset folder (see :func:`casa_core.logs.check_paths`)."""
+    return logs.check_paths([Path(raw_dir)])
+
+
+def build_tables(
+    raw_dir: Path | str,
+    scene: dict,
+    *,
+    dataset: str | None = None,
+    allow_invalid: bool = False,
+) -> DatasetTables:
+    """Check a dataset folder and compute its tables.
+
+    Parameters
+    ----------
+    raw_dir : path
+        The dataset's folder; only read.
+    scene : dict
+        The scene layout (``config/scene.yaml``): the tasks' intended
+        trajectories and the control tick ``teleop.dt``.
+    dataset : str, optional
+        The dataset's name in the tables; the folder's name by default.
+    allow_invalid : bool
+        Exclude bad files (listed in the validation table) instead of raising.
+
+    Raises
+    ------
+    DatasetInvalid
+        When a file breaks the contract and ``allow_invalid`` is false; lists every problem.
+    """
+    root = Path(raw_dir)
+    dataset = dataset or root.resolve().name
+    checks = check_dataset(root)
+    problems = [p for check in checks for p in check.problems]
+    if problems and not allow_invalid:
+        raise DatasetInvalid(dataset, problems)
+    good = [check for check in checks if check.ok]
+    trials, steps = _trials_and_steps([c for c in good if c.kind == "trial"], root, scene, dataset)
+    likert = _likert([c for c in good if c.kind == "surveys"], trials, dataset)
+    return DatasetTables(trials, steps, likert, validation_table(checks, root, allow_invalid))
+
+
+def _trials_and_steps(
+    checks: list[logs.FileCheck], root: Path, scene: dict, dataset: str
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    dt = float(scene["teleop"]["dt"])
+    intended = {}
+    rows, step_parts = [], []
+    for check in checks:
+        meta, frame = check.meta, check.frame  # parsed and checked by logs.check_paths
+        task = meta["task"]
+        if task not in intended:
+            intended[task] = tasks.intended_trajectory(task, scene)
+        trial = _relative(check.file, root).removesuffix(".csv")
+        condition = {key: meta[key] for key in CONDITION}
+        rows.append(
+            {
+                "dataset": dataset,
+                **condition,
+                "source": meta["source"],
+                **metrics.trial_metrics(frame, intended[task], dt),
+                "trial": trial,
+            }
+        )
+        step_parts.append(_steps(frame, condition, dataset, trial))
+    trials = pd.DataFrame(rows, columns=[c for c in TRIAL_COLUMNS if "relative" not in c])
+    trials["relative_effort"] = metrics.relative_effort(trials, "effort")
+    trials["relative_effort_ticks"] = metrics.relative_effort(trials, "effort_ticks")
+    trials = trials.astype({"effort": int, "effort_ticks": int, "ticks": int})
+    trials = trials[list(TRIAL_COLUMNS)].sort_values(CONDITION + ["trial"], kind="stable")
+    steps = [part for part in step_parts if len(part)]
+    steps = pd.concat(steps) if steps else pd.DataFrame(columns=list(STEP_COLUMNS))
+    steps = steps[list(STEP_COLUMNS)].sort_values(CONDITION + ["trial", "t", "intent"])
+    return trials.reset_index(drop=True), steps.reset_index(drop=True)
+
+
+def _steps(frame: pd.DataFrame, condition: dict, dataset: str, trial: str) -> pd.DataFrame:
+    """The long per-tick table of one trial: one row per tick and intent."""
+    names = []
+    for column in frame.columns:
+        prefix, _, name = column.partition(":")
+        if prefix in ("beta", "belief") and name not in names:
+            names.append(name)
+    if not names and "alpha" not in frame.columns:
+        return pd.DataFrame(columns=list(STEP_COLUMNS))
+    alpha = frame["alpha"] if "alpha" in frame.columns else float("nan")
+    parts = []
+    for name in names or [""]:
+        part = pd.DataFrame({"t": frame["t"], "alpha": alpha, "intent": name})
+        for quantity in ("beta", "belief"):
+            column = f"{quantity}:{name}"
+            part[quantity] = frame[column] if column in frame.columns else float("nan")
+        parts.append(part)
+    steps = pd.concat(parts, ignore_index=True)
+    for key, value in {**condition, "dataset": dataset, "trial": trial}.items():
+        steps[key] = value
+    return steps
+
+
+def _likert(checks: list[logs.FileCheck], trials: pd.DataFrame, dataset: str) -> pd.DataFrame:
+    """All survey answers; without a ``source`` column, the participant's trials' source."""
+    sources = trials.groupby("participant")["source"].agg(
+        lambda s: s.iloc[0] if s.nunique() == 1 else "unknown"
+    )
+    parts = []
+    for check in checks:
+        answers = check.frame.copy()
+        if "source" not in answers.columns:
+            answers["source"] = answers["participant"].map(sources).fillna("unknown")
+        answers["dataset"] = dataset
+        parts.append(answers)
+    if not parts:
+        return pd.DataFrame(columns=list(LIKERT_COLUMNS))
+    likert = pd.concat(parts, ignore_index=True)[list(LIKERT_COLUMNS)]
+    return likert.sort_values(CONDITION + ["question"], kind="stable").reset_index(drop=True)
+
+
+def read_table(path: Path | str) -> pd.DataFrame:
+    """Read a processed table (trials, steps, likert, validation) with its values intact.
+
+    pandas' defaults would read the method ``"NA"`` as missing and a participant
+    ``"007"`` as the number 7; here only empty cells are missing and identifying
+    columns stay text.
+    """
+    text_columns = {c: str for c in ("dataset", "participant", "trial", "intent", "file")}
+    return pd.read_csv(path, dtype=text_columns, keep_default_na=False, na_values=[""])
+
+
+def write_tables(tables: DatasetTables, out_dir: Path | str) -> list[Path]:
+    """Write ``trials.csv``, ``steps.csv`` and ``likert.csv`` atomically; return their paths."""
+    out_dir = Path(out_dir)
+    written = []
+    for name in ("trials", "steps", "likert"):
+        path = out_dir / f"{name}.csv"
+        logs.atomic_write_text(path, logs.frame_to_csv_text(getattr(tables, name)))
+        written.append(path)
+    return written
+
+
+def process_dataset(
+    raw_dir: Path | str,
+    out_dir: Path | str,
+    scene: dict,
+    *,
+    dataset: str | None = None,
+    allow_invalid: bool = False,
+) -> DatasetTables:
+    """Build a dataset's tables (:func:`build_tables`) and write them to ``out_dir``."""
+    tables = build_tables(raw_dir, scene, dataset=dataset, allow_invalid=allow_invalid)
+    write_tables(tables, out_dir)
+    return tables
+
+
+def write_validation(
+    paths: list[Path | str], out_csv: Path | str, *, allow_invalid: bool = False
+) -> list[logs.FileCheck]:
+    """Check files and folders, write their validation table atomically, return the checks.
+
+    Paths in the table are relative to the folder given when exactly one folder
+    is given. The table is written whatever the outcome.
+    """
+    paths = [Path(p) for p in paths]
+    root = paths[0] if len(paths) == 1 and paths[0].is_dir() else Path(".")
+    checks = logs.check_paths(paths)
+    table = validation_table(checks, root, allow_invalid)
+    logs.atomic_write_text(Path(out_csv), logs.frame_to_csv_text(table))
+    return checks

@@ -1,0 +1,158 @@
+"""Grouped bars with mean, standard error and every participant as a point.
+
+Shared by the objective and Likert figures: groups (tasks or questions) along the x
+axis, one bar per condition inside each group.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from casa_core.figures import style
+
+
+def participant_means(frame: pd.DataFrame, keys: Sequence[str], value: str) -> pd.DataFrame:
+    """One row per participant and ``keys``: the mean of ``value`` over their trials.
+
+    A participant who repeated a condition contributes one point, so each participant
+    weighs the same in the bar's mean and standard error.
+    """
+    rows = frame.dropna(subset=[value])
+    return rows.groupby([*keys, "participant"], as_index=False, sort=False)[value].mean()
+
+
+def mean_se(values: np.ndarray) -> tuple[float, float]:
+    """Mean and standard error ``sd / sqrt(n)`` (``sd`` with ``n - 1``; 0 for one value)."""
+    values = np.asarray(values, dtype=float)
+    if values.size == 0:
+        return float("nan"), float("nan")
+    if values.size == 1:
+        return float(values[0]), 0.0
+    return float(values.mean()), float(values.std(ddof=1) / np.sqrt(values.size))
+
+
+def draw_grouped_bars(
+    ax,
+    points: pd.DataFrame,
+    group: str,
+    groups: Sequence[str],
+    value: str,
+    width: float = 0.8,
+    show_points: bool = True,
+) -> dict[tuple[str, str], tuple[float, float]]:
+    """Draw one bar per (group, condition) with its standard error and participants' points.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    points : DataFrame
+        One row per participant, with columns ``group``, ``condition``, ``participant``
+        and ``value`` (see :func:`participant_means`).
+    group : str
+        Column whose values are placed along the x axis, in the order ``groups``.
+    groups : sequence of str
+        Groups to draw, left to right; a group without rows keeps its slot, empty.
+    value : str
+        Column of the bar heights.
+    width : float
+        Width of a whole group on the x axis (a group slot is 1 wide).
+    show_points : bool
+        Draw every participant as a point over the bar.
+
+    Returns
+    -------
+    dict
+        ``(group, condition) -> (x centre, top of the bar's data)``, where the top is the
+        highest of the error bar and the points: where a bracket may start.
+    """
+    present = [c for c in style.CONDITIONS if c in set(points["condition"])]
+    # Room for four bars (the misspecified tasks' conditions) in every group, so bars keep
+    # one width across panels and figures, also when a dataset has fewer conditions.
+    bar_width = width / max(4, _max_conditions_per_group(points, group))
+    tops: dict[tuple[str, str], tuple[float, float]] = {}
+    for gx, name in enumerate(groups):
+        in_group = points[points[group] == name]
+        conditions = [c for c in present if c in set(in_group["condition"])]
+        offsets = (np.arange(len(conditions)) - (len(conditions) - 1) / 2) * bar_width
+        for offset, condition in zip(offsets, conditions, strict=True):
+            rows = in_group[in_group["condition"] == condition]
+            values = rows[value].to_numpy(dtype=float)
+            mean, se = mean_se(values)
+            x = gx + offset
+            colour = style.METHOD_COLOURS[condition]
+            ax.bar(
+                x,
+                mean,
+                bar_width * 0.9,
+                color=colour,
+                edgecolor="0.15",
+                linewidth=0.5,
+                label=condition,
+                zorder=2,
+            )
+            ax.errorbar(
+                x, mean, yerr=se, color="0.1", capsize=2, elinewidth=0.9, capthick=0.9, zorder=4
+            )
+            if not show_points:
+                tops[(name, condition)] = (x, mean + se)
+                continue
+            # Participants spread evenly (no random jitter) across half the bar, in
+            # participant order so the same participant sits at the same place.
+            order = np.argsort(rows["participant"].astype(str).to_numpy(), kind="stable")
+            spread = np.linspace(-0.22, 0.22, len(values)) if len(values) > 1 else np.zeros(1)
+            ax.scatter(
+                x + spread * bar_width,
+                values[order],
+                s=6,
+                facecolor="white",
+                edgecolor="0.1",
+                linewidth=0.5,
+                zorder=5,
+            )
+            tops[(name, condition)] = (x, float(np.nanmax([mean + se, *values])))
+    ax.set_xticks(range(len(groups)))
+    ax.set_xlim(-0.5, len(groups) - 0.5)
+    return tops
+
+
+def _max_conditions_per_group(points: pd.DataFrame, group: str) -> int:
+    counts = points.groupby(group)["condition"].nunique()
+    return int(counts.max()) if len(counts) else 1
+
+
+#: How far (x axis units; a group slot is 1) bracket ends stay from the bar centres.
+BRACKET_INSET = 0.03
+#: Room (x axis units) kept free beside a bracket for the stars of its neighbour.
+LABEL_ROOM = 0.1
+
+
+def draw_brackets(ax, brackets: Sequence[tuple[float, float, float, str]]) -> None:
+    """Draw significance brackets ``(x_left, x_right, base, label)`` stacked without overlap.
+
+    ``base`` is the data height above which the bracket must sit (the highest data under
+    it); a bracket overlapping narrower ones along x sits one step above them. The step
+    is 9 % of the y range.
+    """
+    if not brackets:
+        return
+    low, high = ax.get_ylim()
+    step = 0.09 * (high - low)
+    placed: list[tuple[float, float, float]] = []
+    for x0, x1, base, label in sorted(brackets, key=lambda b: (b[1] - b[0], b[0])):
+        # Narrow brackets first; a wider one goes above every bracket it overlaps.
+        # Brackets that meet at a bar count as overlapping: their stars would collide.
+        near = [py for px0, px1, py in placed if px0 <= x1 + LABEL_ROOM and x0 <= px1 + LABEL_ROOM]
+        above = [py + step for py in near]
+        y = max([base + 0.5 * step, *above])
+        placed.append((x0, x1, y))
+        tick = 0.25 * step
+        # Ends pulled in a little, so brackets sharing a bar do not touch.
+        x0, x1 = x0 + BRACKET_INSET, x1 - BRACKET_INSET
+        ax.plot([x0, x0, x1, x1], [y - tick, y, y, y - tick], color="0.1", lw=0.7, zorder=6)
+        ax.text((x0 + x1) / 2, y, label, ha="center", va="bottom", fontsize=7, zorder=6)
+    top = max(y for _, _, y in placed) + step
+    if top > high:
+        ax.set_ylim(low, top)

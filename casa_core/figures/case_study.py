@@ -1,0 +1,206 @@
+"""The expert case study (paper, Fig. "case_study").
+
+One row per task. Left: the confidence ``beta_hat`` in each intent over time with the
+robot's intents before learning (for Known Goal, its only run). Middle: the same after
+learning, for the misspecified tasks. Right: the human's control authority ``alpha``
+over time under PBA and CASA (before and after learning).
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+from matplotlib.figure import Figure
+
+from casa_core.figures import style
+
+COLUMNS = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
+
+#: Which condition's run fills the confidence panels.
+BEFORE = ("CASA", "CASA before learning")
+AFTER = "CASA after learning"
+#: Series of the alpha panel, in legend order, with their line styles.
+ALPHA_SERIES: dict[str, str] = {
+    "PBA": "--",
+    "CASA": "-",
+    "CASA before learning": "-",
+    "CASA after learning": "-",
+}
+
+
+def prepare_steps(steps: pd.DataFrame, participant: str | None = None) -> tuple[pd.DataFrame, str]:
+    """One participant's steps of the three tasks, with each row's ``condition``.
+
+    Parameters
+    ----------
+    steps : DataFrame
+        ``steps.csv``.
+    participant : str, optional
+        Whose runs to draw; by default the only one, or the first in sorted order.
+
+    Returns
+    -------
+    (DataFrame, str)
+        The rows and the participant's name.
+
+    Raises
+    ------
+    ValueError
+        If a column is missing, the participant is absent, a value is not a number, or
+        one run has two rows for the same time and intent.
+    """
+    style.require_columns(steps, COLUMNS, "steps")
+    names = sorted(steps["participant"].astype(str).unique())
+    if not names:
+        raise ValueError("steps: the table has no rows")
+    participant = names[0] if participant is None else str(participant)
+    if participant not in names:
+        raise ValueError(f"steps: no rows for participant {participant!r}; have {names}")
+    rows = steps[steps["participant"].astype(str) == participant]
+    rows = rows[rows["task"].isin(list(style.TASK_LABELS))].copy()
+    rows = style.numeric_columns(rows, ["t", "alpha", "beta", "belief"], "steps")
+    conditions = []
+    for index, row in rows.iterrows():
+        try:
+            conditions.append(style.condition_of(str(row["method"]), str(row["phase"])))
+        except ValueError as error:
+            raise ValueError(f"steps row {index}: {error}") from None
+    rows["condition"] = conditions
+    twice = rows.duplicated(["task", "condition", "t", "intent"], keep=False)
+    if twice.any():
+        index = twice.idxmax()
+        row = rows.loc[index]
+        raise ValueError(
+            f"steps row {index}: participant {participant!r}, {row['task']}, "
+            f"{row['condition']} has two rows for t = {row['t']} and intent {row['intent']!r}"
+        )
+    return rows, participant
+
+
+def case_study_figure(
+    steps: pd.DataFrame,
+    participant: str | None = None,
+    epsilon: float | None = None,
+    title: str | None = None,
+) -> Figure:
+    """Draw confidence and arbitration over time for each task of the case study.
+
+    Parameters
+    ----------
+    steps : DataFrame
+        ``steps.csv``: one row per (tick, intent), columns ``participant, task, method,
+        phase, t, alpha, intent, beta, belief``.
+    participant : str, optional
+        Whose runs to draw (the case study has one expert); default: the first.
+    epsilon : float, optional
+        The misspecification threshold, drawn on the confidence panels when given.
+    title : str, optional
+        First words of the caption.
+
+    Returns
+    -------
+    Figure
+        A grid of axes, one row per task present and three columns (confidence before
+        learning, confidence after learning, alpha); ``fig.axes_grid[task]`` maps each
+        task to its three axes. Panels without data carry a note.
+    """
+    rows, participant = prepare_steps(steps, participant)
+    tasks = [t for t in style.TASK_LABELS if t in set(rows["task"])]
+    if not tasks:
+        raise ValueError(f"steps: participant {participant!r} has no rows of a study task")
+    colours = style.intent_colours(rows["intent"].dropna().astype(str).unique())
+    with style.context():
+        fig = style.new_figure(7.0, 1.75 * len(tasks) + 0.5)
+        grid = fig.subplots(len(tasks), 3, squeeze=False, sharex="row")
+        axes_grid = {}
+        for r, task in enumerate(tasks):
+            in_task = rows[rows["task"] == task]
+            before, after, alpha_ax = grid[r]
+            axes_grid[task] = (before, after, alpha_ax)
+            before_run = in_task[in_task["condition"].isin(BEFORE)]
+            after_run = in_task[in_task["condition"] == AFTER]
+            top = max(
+                [float(run["beta"].max()) for run in (before_run, after_run) if len(run)]
+                + [epsilon or 0.0]
+            )
+            for ax, run, what in ((before, before_run, "before"), (after, after_run, "after")):
+                if run.empty:
+                    reason = (
+                        "no misspecification:\nnothing to learn"
+                        if task == "known_goal" and what == "after"
+                        else f"no CASA run {what} learning"
+                    )
+                    style.note_axes(ax, reason)
+                    continue
+                _confidence_panel(ax, run, colours, epsilon, 1.12 * top if top > 0 else 1.0)
+            _alpha_panel(alpha_ax, in_task)
+            before.annotate(
+                style.TASK_LABELS[task],
+                (0.0, 0.5),
+                xycoords="axes fraction",
+                # Left of the tick labels and the y label, whatever the axes' width.
+                xytext=(-50, 0),
+                textcoords="offset points",
+                rotation=90,
+                ha="center",
+                va="center",
+                fontweight="bold",
+            )
+        titles = ("Before learning", "After learning", "Arbitration")
+        for ax, name in zip(grid[0], titles, strict=True):
+            ax.set_title(name)
+        for ax in grid[-1]:
+            if ax.has_data():
+                ax.set_xlabel("Time (s)")
+        # "simulated participant expert": simulated data says so (steps may carry source).
+        sources = sorted(set(rows["source"].dropna().astype(str))) if "source" in rows else []
+        who = " ".join([" and ".join(sources), "participant"]).strip()
+        caption = f"{title or 'Case study'}, {who} {participant}."
+        caption += (
+            " Confidence in each intent the robot knows, before and after learning the new"
+            " intent, and the user's control authority under PBA and CASA."
+        )
+        style.add_caption(fig, caption)
+    fig.axes_grid = axes_grid
+    return fig
+
+
+def _confidence_panel(ax, run: pd.DataFrame, colours, epsilon, top: float) -> None:
+    # The paper's goals first, in its order, then other (learned) intents by name.
+    goals = list(style.GOAL_COLOURS)
+    order = sorted(
+        run["intent"].astype(str).unique(),
+        key=lambda name: (goals.index(name) if name in goals else len(goals), name),
+    )
+    for intent in order:
+        series = run[run["intent"].astype(str) == intent].sort_values("t")
+        ax.plot(series["t"], series["beta"], color=colours[str(intent)], label=str(intent))
+    if epsilon is not None:
+        ax.axhline(epsilon, color="0.3", lw=0.7, ls=":")
+    ax.set_ylim(0, top)
+    ax.set_ylabel("Confidence $\\hat\\beta_\\theta$")
+    ax.legend(loc="upper left", handlelength=1.2)
+
+
+def _alpha_panel(ax, in_task: pd.DataFrame) -> None:
+    drawn = 0
+    for condition, dashes in ALPHA_SERIES.items():
+        run = in_task[in_task["condition"] == condition]
+        if run.empty:
+            continue
+        # alpha belongs to the tick; every intent's row of a tick repeats it.
+        series = run.groupby("t", sort=True)["alpha"].first()
+        ax.plot(
+            series.index,
+            series.to_numpy(),
+            color=style.METHOD_COLOURS[condition],
+            ls=dashes,
+            label=condition,
+        )
+        drawn += 1
+    if not drawn:
+        style.note_axes(ax, "no PBA or CASA run")
+        return
+    ax.set_ylim(-0.03, 1.05)
+    ax.set_ylabel("Control authority $\\alpha$")
+    # Beside the panel: inside, it would hide the curves that end low or high.
+    ax.legend(loc="center left", bbox_to_anchor=(1.02, 0.5), handlelength=1.6)

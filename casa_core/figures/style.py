@@ -1,0 +1,272 @@
+"""One style for every figure: colours, condition names, labels and saving.
+
+Methods get the colour-blind-safe Okabe-Ito palette (Okabe and Ito, 2008); the
+paper's goals keep their colours (green, purple, red). Every figure is built by
+a function that takes processed tables and returns a :class:`matplotlib.figure.Figure`;
+:func:`save_figure` writes it as vector PDF plus 200 dpi PNG, atomically.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+import tempfile
+import textwrap
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+import matplotlib as mpl
+import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+#: Resolution of the PNG copies (the issue asks for 200 dpi).
+PNG_DPI = 200
+
+#: The study's conditions in the paper's order and words. A condition is a method in a
+#: phase: CASA appears without misspecification, before and after learning. The protocol
+#: runs only CASA after learning; NA or PBA after learning would be conditions of their own
+#: (as in :func:`casa_core.stats.study.condition_of`).
+CONDITIONS: tuple[str, ...] = (
+    "NA",
+    "PBA",
+    "CASA",
+    "CASA before learning",
+    "CASA after learning",
+    "NA after learning",
+    "PBA after learning",
+)
+
+#: Okabe-Ito colours for the conditions (colour-blind safe; the CASA family in blues/green).
+METHOD_COLOURS: dict[str, str] = {
+    "NA": "#999999",  # grey: no assistance
+    "PBA": "#E69F00",  # orange
+    "CASA": "#0072B2",  # blue
+    "CASA before learning": "#56B4E9",  # sky blue
+    "CASA after learning": "#009E73",  # bluish green
+    "NA after learning": "#000000",  # black
+    "PBA after learning": "#D55E00",  # vermillion
+}
+
+#: Tasks on the axes, in the paper's order and words.
+TASK_LABELS: dict[str, str] = {
+    "known_goal": "Known Goal",
+    "unknown_goal": "Unknown Goal",
+    "unknown_skill": "Unknown Skill",
+}
+
+#: The goals' colours in the paper's scene figure; learned or other intents fall back
+#: to :data:`OTHER_INTENT_COLOURS` in name order.
+GOAL_COLOURS: dict[str, str] = {"green": "#1A9E3F", "purple": "#7B3294", "red": "#D7191C"}
+OTHER_INTENT_COLOURS: tuple[str, ...] = ("#A6611A", "#000000", "#0072B2", "#E69F00")
+
+#: The three Likert questions (NOTES, section 3) and the paper's wording of them.
+LIKERT_QUESTIONS: dict[str, str] = {
+    "understood": "Understood",
+    "effortless": "Effortless",
+    "useful": "Useful",
+}
+
+SIMULATED_NOTE = "simulated participants"
+
+
+def condition_of(method: str, phase: str) -> str:
+    """Name of the study condition of a trial, in the paper's words.
+
+    Parameters
+    ----------
+    method : str
+        ``"NA"``, ``"PBA"`` or ``"CASA"``.
+    phase : str
+        The trial's phase (casa-trial/1). CASA in ``before_learning`` and
+        ``after_learning`` is the paper's "CASA before / after learning"; NA and PBA keep
+        their names except after learning. The same rule as the stats table's.
+
+    Returns
+    -------
+    str
+        One of :data:`CONDITIONS`.
+    """
+    if method not in ("NA", "PBA", "CASA"):
+        raise ValueError(f"unknown method {method!r}; expected NA, PBA or CASA")
+    if method == "CASA" and phase == "before_learning":
+        return "CASA before learning"
+    if phase == "after_learning":
+        return f"{method} after learning"
+    return method
+
+
+def intent_colours(names: Iterable[str]) -> dict[str, str]:
+    """Colour of each intent: the paper's goal colour if the name holds one, else a fallback.
+
+    A name that contains ``green``, ``purple`` or ``red`` (e.g. a learned ``"red"`` or
+    ``"learned_red"``) takes that goal's colour, so a goal keeps its colour before and
+    after it is learned. Other names (e.g. the pouring skill) take the fallbacks in
+    sorted order.
+    """
+    colours: dict[str, str] = {}
+    fallback = itertools.cycle(OTHER_INTENT_COLOURS)
+    for name in sorted(set(names)):
+        match = [goal for goal in GOAL_COLOURS if goal in name.lower()]
+        colours[name] = GOAL_COLOURS[match[0]] if match else next(fallback)
+    return colours
+
+
+def source_note(frame: pd.DataFrame) -> str:
+    """Words for the data's origin: ``"simulated participants"``, ``"human participants"``...
+
+    Uses the ``source`` column of the processed tables; a table without it says nothing.
+    """
+    if "source" not in frame.columns or frame.empty:
+        return ""
+    sources = sorted(set(frame["source"].dropna().astype(str)))
+    words = {"simulated": SIMULATED_NOTE, "human": "human participants"}
+    return " and ".join(words.get(s, f"{s} participants") for s in sources)
+
+
+def describe(what: str, frame: pd.DataFrame) -> str:
+    """First sentence of a caption: what is shown, by whom, how many (``"..., n = 11."``)."""
+    who = source_note(frame) or "participants"
+    n = frame["participant"].nunique() if "participant" in frame.columns else 0
+    return f"{what}, {who} (n = {n})." if n else f"{what}, {who}."
+
+
+def require_columns(frame: pd.DataFrame, columns: Sequence[str], table: str) -> None:
+    """Raise a clear error if ``frame`` (the table named ``table``) lacks some ``columns``."""
+    missing = [c for c in columns if c not in frame.columns]
+    if missing:
+        raise ValueError(
+            f"{table}: missing column(s) {', '.join(missing)}; "
+            f"expected at least {', '.join(columns)}"
+        )
+
+
+#: Matplotlib settings for every figure: small serif-free fonts readable at column width,
+#: no top/right spines, fonts embedded as TrueType in the PDF (editable, no Type 3).
+RC: dict[str, object] = {
+    "font.size": 8,
+    "axes.titlesize": 9,
+    "axes.labelsize": 8,
+    "xtick.labelsize": 7.5,
+    "ytick.labelsize": 7.5,
+    "legend.fontsize": 7.5,
+    "legend.frameon": False,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "axes.linewidth": 0.7,
+    "lines.linewidth": 1.4,
+    "pdf.fonttype": 42,
+    "savefig.pad_inches": 0.03,
+}
+
+
+def numeric_columns(frame: pd.DataFrame, columns: Sequence[str], table: str) -> pd.DataFrame:
+    """A copy of ``frame`` with ``columns`` as floats; a clear error names a bad cell's row.
+
+    Empty cells stay missing; any other text that is not a number is an error.
+    """
+    frame = frame.copy()
+    for column in columns:
+        values = pd.to_numeric(frame[column], errors="coerce")
+        bad = values.isna() & frame[column].notna()
+        if bad.any():
+            index = bad.idxmax()
+            raise ValueError(
+                f"{table} row {index}: {column} {frame.loc[index, column]!r} is not a number"
+            )
+        frame[column] = values.astype(float)
+    return frame
+
+
+def context():
+    """A context in which to build a figure in the house style (``with style.context(): ...``)."""
+    return mpl.rc_context(RC)
+
+
+def new_figure(width: float, height: float) -> Figure:
+    """An empty figure of ``width`` x ``height`` inches on the headless Agg canvas.
+
+    Built without :mod:`matplotlib.pyplot`, so no global figure registry fills up and
+    no display is needed; call it inside :func:`context`.
+    """
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def note_axes(ax, text: str) -> None:
+    """Mark an empty panel with a note saying why it is empty."""
+    ax.text(
+        0.5,
+        0.5,
+        text,
+        transform=ax.transAxes,
+        ha="center",
+        va="center",
+        fontsize=7.5,
+        color="0.35",
+        wrap=True,
+    )
+    # Hide ticks without removing them: the axes may share its y axis with others.
+    ax.tick_params(left=False, labelleft=False, bottom=False, labelbottom=False)
+    for spine in ax.spines.values():
+        spine.set_visible(False)
+
+
+def add_caption(fig: Figure, text: str) -> None:
+    """A one-line caption at the bottom of the figure (data origin and notes)."""
+    if text:
+        # About 20 characters of 7-pt text per inch of figure width.
+        wrapped = textwrap.fill(text, width=int(20 * fig.get_figwidth()))
+        # Just below the figure (the saved bounding box grows to hold it), clear of a
+        # legend placed at the bottom edge.
+        fig.text(0.5, -0.02, wrapped, ha="center", va="top", fontsize=7, color="0.25")
+
+
+def _atomic_savefig(fig: Figure, path: Path, **kwargs) -> None:
+    """Write ``fig`` to ``path`` through a temporary file in the same folder."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        with context():
+            fig.savefig(tmp, format=path.suffix.lstrip("."), bbox_inches="tight", **kwargs)
+        os.chmod(tmp, 0o644)  # mkstemp makes the file private; figures are to be shared
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def save_figure(fig: Figure, prefix: str | os.PathLike, formats: Sequence[str] = ("pdf", "png")):
+    """Write ``fig`` as ``<prefix>.pdf`` (vector) and ``<prefix>.png`` (200 dpi), atomically.
+
+    Parameters
+    ----------
+    fig : Figure
+        The figure to write.
+    prefix : path-like
+        Output path without suffix; a given ``.pdf`` or ``.png`` suffix is dropped.
+    formats : sequence of str
+        Which files to write, among ``"pdf"`` and ``"png"``.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    prefix = Path(prefix)
+    if prefix.suffix.lower() in (".pdf", ".png"):
+        prefix = prefix.with_suffix("")
+    written = []
+    for fmt in formats:
+        if fmt not in ("pdf", "png"):
+            raise ValueError(f"unknown figure format {fmt!r}; expected 'pdf' or 'png'")
+        path = prefix.with_name(f"{prefix.name}.{fmt}")
+        if fmt == "png":
+            _atomic_savefig(fig, path, dpi=PNG_DPI)
+        else:
+            # No creation date: the same tables give the same bytes, run after run.
+            _atomic_savefig(fig, path, metadata={"CreationDate": None})
+        written.append(path)
+    return written

@@ -1,0 +1,437 @@
+"""The intent library: one versioned file per learned intent (issue 5, item 4).
+
+Lifelong learning keeps what it learned: each learned intent is one file
+``<name>.intent.json`` in a library folder, holding the cost network's weights
+and what a reader needs to trust and reuse them: name, task, participant, input
+features, scene objects, seed, SHA-256 hashes of the demonstrations, the IRL
+settings and the training history.
+
+Format ``casa-intent/1``: a JSON object with the keys of :data:`REQUIRED_KEYS`.
+The weights are stored per parameter as shape, dtype and base64 of the
+little-endian bytes, so the file is plain text and self-describing. The key
+``checksum`` is the SHA-256 of the canonical JSON (sorted keys, no spaces) of
+every other key: a truncated, edited or bit-flipped file is detected. Files are
+written atomically (a temporary file in the same folder, then a rename).
+
+Reading a library never fails as a whole: :func:`scan_library` returns the good
+entries and, separately, one :class:`LibraryError` per bad file, naming the file
+and the rule it breaks.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import os
+import re
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from casa_core.irl import IRLConfig, NeuralIntent, cost_network, feature_names
+from casa_core.planning import PlannerConfig
+
+FORMAT = "casa-intent"
+VERSION = 1
+SUFFIX = ".intent.json"
+REQUIRED_KEYS = (
+    "format",
+    "version",
+    "name",
+    "task",
+    "participant",
+    "seed",
+    "features",
+    "objects",
+    "network",
+    "cost_scale",
+    "length_scale",
+    "planner",
+    "guides",
+    "demo_hashes",
+    "irl_config",
+    "history",
+    "weights",
+    "checksum",
+)
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+class LibraryError(ValueError):
+    """A library file that cannot be used; the message names the file and the rule broken."""
+
+    def __init__(self, path: Path | str, rule: str, message: str):
+        self.path = Path(path)
+        self.rule = rule
+        super().__init__(f"{self.path}: [{rule}] {message}")
+
+
+@dataclass(frozen=True)
+class LibraryEntry:
+    """A learned intent read from the library.
+
+    Attributes
+    ----------
+    path : Path
+        Its file.
+    intent : NeuralIntent
+        The intent, ready for an :class:`casa_core.assistant.Assistant`.
+    metadata : dict
+        Every key of the file but ``weights`` and ``checksum``.
+    """
+
+    path: Path
+    intent: NeuralIntent
+    metadata: dict
+
+    def summary(self) -> str:
+        """One line: name, task, participant, seed, demonstrations, iterations, convergence."""
+        m = self.metadata
+        history = m["history"]
+        converged = bool(history and history[-1].get("converged"))
+        return (
+            f"{m['name']}\ttask={m['task']}\tparticipant={m['participant']}\tseed={m['seed']}"
+            f"\tdemos={len(m['demo_hashes'])}\titerations={len(history)}"
+            f"\tconverged={'yes' if converged else 'no'}\tfile={self.path.name}"
+        )
+
+
+def demo_hash(demo) -> str:
+    """SHA-256 of a demonstration ``(n, 5)``: its shape and float64 little-endian bytes."""
+    array = np.ascontiguousarray(np.asarray(demo, dtype="<f8"))
+    digest = hashlib.sha256(repr(array.shape).encode())
+    digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def intent_path(library: Path | str, name: str) -> Path:
+    """The file of intent ``name`` in ``library``."""
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(
+            f"intent name {name!r} cannot name a file: use letters, digits, '_', '-', '.'"
+        )
+    return Path(library) / f"{name}{SUFFIX}"
+
+
+def _canonical(payload: dict) -> bytes:
+    return json.dumps(payload, sort_keys=True, separators=(",", ":"), allow_nan=False).encode()
+
+
+def _encode_weights(network: torch.nn.Module) -> dict:
+    weights = {}
+    for key, tensor in network.state_dict().items():
+        array = tensor.detach().cpu().numpy()
+        weights[key] = {
+            "shape": list(array.shape),
+            "dtype": str(array.dtype),
+            "data": base64.b64encode(
+                array.astype(array.dtype.newbyteorder("<")).tobytes()
+            ).decode(),
+        }
+    return weights
+
+
+def save_intent(
+    library: Path | str,
+    intent: NeuralIntent,
+    *,
+    task: str,
+    participant: str,
+    seed: int,
+    demos,
+    history: list[dict],
+    config: IRLConfig,
+) -> Path:
+    """Write a learned intent to ``<library>/<name>.intent.json`` atomically.
+
+    Parameters
+    ----------
+    library : path
+        The library folder (created if missing).
+    intent : NeuralIntent
+        The learned intent (:func:`casa_core.irl.learn_intent`).
+    task, participant : str
+        Where the demonstrations came from (free text; "" if unknown).
+    seed : int
+        The seed it was learned with.
+    demos : list of array_like
+        The demonstrations ``(n, 5)``; only their hashes are stored.
+    history : list of dict
+        The training history returned by ``learn_intent``.
+    config : IRLConfig
+        The settings it was learned with.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    path = intent_path(library, intent.name)
+    payload = {
+        "format": FORMAT,
+        "version": VERSION,
+        "name": intent.name,
+        "task": str(task),
+        "participant": str(participant),
+        "seed": int(seed),
+        "features": intent.features,
+        "objects": [
+            {"name": n, "position": p.tolist()}
+            for n, p in zip(intent.object_names, intent.objects, strict=True)
+        ],
+        "network": {
+            "inputs": len(intent.features),
+            "hidden": config.hidden,
+            "negative_slope": config.negative_slope,
+        },
+        "cost_scale": intent.cost_scale,
+        "length_scale": intent.length_scale,
+        "planner": asdict(intent.planner),
+        "guides": [g.tolist() for g in intent.guides],
+        "demo_hashes": [demo_hash(d) for d in demos],
+        "irl_config": {k: v for k, v in asdict(config).items() if k != "planner"},
+        "history": history,
+        "weights": _encode_weights(intent.network),
+    }
+    payload["checksum"] = hashlib.sha256(_canonical(payload)).hexdigest()
+    text = json.dumps(payload, indent=1, sort_keys=True, allow_nan=False) + "\n"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _require(path: Path, ok: bool, rule: str, message: str) -> None:
+    if not ok:
+        raise LibraryError(path, rule, message)
+
+
+def load_intent(path: Path | str) -> LibraryEntry:
+    """Read and check one library file.
+
+    Raises
+    ------
+    LibraryError
+        Naming the file and the rule broken: unreadable, not JSON (e.g.
+        truncated), wrong format or version, missing keys, checksum mismatch,
+        or weights that do not fit the network.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise LibraryError(path, "readable", f"cannot be read: {error}") from None
+    try:
+        payload = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise LibraryError(
+            path, "json", f"is not valid JSON (truncated or damaged?): {error}"
+        ) from None
+    _require(path, isinstance(payload, dict), "json", "must hold a JSON object")
+    _require(
+        path,
+        payload.get("format") == FORMAT,
+        "format",
+        f"format must be {FORMAT!r}, got {payload.get('format')!r}",
+    )
+    _require(
+        path,
+        payload.get("version") == VERSION,
+        "version",
+        f"version {payload.get('version')!r} is not supported (this casa reads {VERSION})",
+    )
+    missing = [key for key in REQUIRED_KEYS if key not in payload]
+    _require(path, not missing, "required-key", f"missing key(s): {', '.join(missing)}")
+    body = {k: v for k, v in payload.items() if k != "checksum"}
+    _require(
+        path,
+        hashlib.sha256(_canonical(body)).hexdigest() == payload["checksum"],
+        "checksum",
+        "checksum does not match the content: the file was damaged or edited",
+    )
+    types = {
+        "name": str,
+        "task": str,
+        "participant": str,
+        "seed": int,
+        "demo_hashes": list,
+        "history": list,
+        "objects": list,
+        "guides": list,
+    }
+    for key, kind in types.items():
+        _require(
+            path,
+            isinstance(payload[key], kind),
+            "content",
+            f"{key} must be a JSON {kind.__name__}, got {type(payload[key]).__name__}",
+        )
+    _require(
+        path,
+        all(isinstance(record, dict) for record in payload["history"]),
+        "content",
+        "history must be a list of objects",
+    )
+    try:
+        intent = _build_intent(payload)
+    except (KeyError, TypeError, ValueError, RuntimeError) as error:
+        raise LibraryError(path, "content", f"does not describe a usable intent: {error}") from None
+    metadata = {k: v for k, v in payload.items() if k not in ("weights", "checksum")}
+    return LibraryEntry(path=path, intent=intent, metadata=metadata)
+
+
+def _build_intent(payload: dict) -> NeuralIntent:
+    object_names = [obj["name"] for obj in payload["objects"]]
+    positions = [obj["position"] for obj in payload["objects"]]
+    if payload["features"] != feature_names(object_names):
+        raise ValueError("features do not match the objects (an incompatible feature set)")
+    spec = payload["network"]
+    if spec["inputs"] != len(payload["features"]):
+        raise ValueError(f"network has {spec['inputs']} inputs for {len(payload['features'])}")
+    network = cost_network(spec["inputs"], spec["hidden"], spec["negative_slope"], seed=0)
+    expected = network.state_dict()
+    stored = payload["weights"]
+    if set(stored) != set(expected):
+        raise ValueError(f"weights {sorted(stored)} do not match the network {sorted(expected)}")
+    state = {}
+    for key, entry in stored.items():
+        data = base64.b64decode(entry["data"], validate=True)
+        array = np.frombuffer(data, dtype=np.dtype(entry["dtype"]).newbyteorder("<"))
+        array = array.reshape(entry["shape"]).astype(np.float32)
+        if tuple(array.shape) != tuple(expected[key].shape):
+            raise ValueError(
+                f"weight {key} has shape {array.shape}, expected {tuple(expected[key].shape)}"
+            )
+        if not np.isfinite(array).all():
+            raise ValueError(f"weight {key} is not finite")
+        state[key] = torch.from_numpy(array.copy())
+    network.load_state_dict(state)
+    return NeuralIntent(
+        payload["name"],
+        network,
+        object_names,
+        positions,
+        payload["cost_scale"],
+        payload["length_scale"],
+        PlannerConfig(**payload["planner"]),
+        guides=[np.asarray(g, dtype=float) for g in payload["guides"]],
+    )
+
+
+def scan_library(library: Path | str) -> tuple[list[LibraryEntry], list[LibraryError]]:
+    """Every ``*.intent.json`` in ``library`` (sorted): the good ones and the problems.
+
+    A bad file never hides the others. A missing folder is one problem.
+    """
+    library = Path(library)
+    if not library.is_dir():
+        return [], [LibraryError(library, "folder", "is not a folder")]
+    entries, problems = [], []
+    names: dict[str, Path] = {}
+    for path in sorted(library.glob(f"*{SUFFIX}")):
+        try:
+            entry = load_intent(path)
+        except LibraryError as error:
+            problems.append(error)
+            continue
+        name = entry.metadata["name"]
+        if name in names:
+            problems.append(
+                LibraryError(path, "unique-name", f"intent {name!r} is also in {names[name]}")
+            )
+            continue
+        names[name] = path
+        entries.append(entry)
+    return entries, problems
+
+
+def read_demonstrations(folder: Path | str, task: str | None = None) -> tuple[list, list[dict]]:
+    """The demonstrations in ``folder`` (every casa-trial/1 log below it, sorted).
+
+    Logs are read with :func:`casa_core.logs.read_trial` (which validates them);
+    with ``task``, only that task's trials are kept.
+
+    Returns
+    -------
+    demos : list of numpy.ndarray
+        Each ``(n, 5)`` of ``[t, x, y, z, rot]``.
+    metas : list of dict
+        Their metadata, in the same order.
+
+    Raises
+    ------
+    ValueError
+        If the folder has no trial (of that task); :class:`casa_core.logs.LogError`
+        if a log breaks the contract.
+    """
+    from casa_core import logs
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ValueError(f"{folder}: demonstrations folder not found")
+    stems = [p.with_suffix("") for p in logs.find_files(folder) if p.suffix == ".json"]
+    demos, metas = [], []
+    for stem in stems:
+        meta, frame = logs.read_trial(stem)
+        if task is not None and meta["task"] != task:
+            continue
+        demos.append(frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float))
+        metas.append(meta)
+    if not demos:
+        which = f" of task {task!r}" if task else ""
+        raise ValueError(f"{folder}: no trial log{which} found (casa-trial/1 .json + .csv pairs)")
+    return demos, metas
+
+
+def learn_to_library(
+    demos_folder: Path | str,
+    name: str,
+    library: Path | str,
+    scene: dict,
+    seed: int = 0,
+    task: str | None = None,
+    participant: str | None = None,
+    config: IRLConfig | None = None,
+) -> tuple[Path, list[dict], float]:
+    """Learn intent ``name`` from the logs in ``demos_folder`` and save it in ``library``.
+
+    ``task`` filters the logs; task and participant stored default to those of
+    the logs when they all agree (else ""). Returns the file, the training
+    history and the training time in seconds.
+    """
+    import time
+
+    from casa_core.irl import learn_intent
+
+    config = IRLConfig() if config is None else config
+    intent_path(library, name)  # a bad name fails before training
+    demos, metas = read_demonstrations(demos_folder, task)
+
+    def agreed(key: str) -> str:
+        values = {str(m.get(key, "")) for m in metas}
+        return values.pop() if len(values) == 1 else ""
+
+    began = time.perf_counter()
+    intent, history = learn_intent(demos, scene, name, seed, config)
+    seconds = time.perf_counter() - began
+    path = save_intent(
+        library,
+        intent,
+        task=agreed("task") if task is None else task,
+        participant=agreed("participant") if participant is None else participant,
+        seed=seed,
+        demos=demos,
+        history=history,
+        config=config,
+    )
+    return path, history, seconds

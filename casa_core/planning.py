@@ -1,0 +1,409 @@
+"""Trajectory optimization in torch for any differentiable per-state cost.
+
+The paper computes optimal trajectories xi* "with any off-the-shelf trajectory
+optimizer" (footnote to Sec. II-B; the original used TrajOpt). Goal intents have
+a closed-form optimum (:mod:`casa_core.intents`); the pouring skill and learned
+(neural) costs do not, and are planned here.
+
+A trajectory is ``n + 1`` states ``[x, y, z, rot]`` every ``dt`` seconds (the
+original: T = 15 s, dt = 0.5 s, 31 states), the first being the given start.
+Its cost is the sum of a per-state cost over the states *after* the start, so
+that costs are additive along the trajectory and a prefix cost plus an optimal
+cost-to-go is the cost of the whole (the decomposition the paper's eq. 3 needs).
+
+Each step is bounded by the keyboard's speed limits times ``dt``: by default
+0.05 m/s on each Cartesian axis and 0.5 rad/s on rot (NOTES section 1), i.e. a
+box of 0.025 m x 3 and 0.25 rad per step; ``limit="norm"`` bounds the Euclidean
+speed of the position instead (what :class:`casa_core.assistant.Assistant` uses
+for its own action u*).
+
+The optimizer works on the states themselves, in units of the per-step limit,
+where a per-state cost is well conditioned (optimizing the steps instead couples
+every state to all earlier ones and converges far more slowly). Each iteration
+takes an Adam step on the states with the gradient of the cost, then makes the
+trajectory feasible again by walking from the start and clipping every step to
+its limit (:func:`feasible`); the step size decays geometrically, and the
+cheapest iterate met is returned (on a non-convex cost, Adam may climb out of a
+good initial guess). With ``limit="norm"`` Adam's second moment is shared by the
+three position axes so that a step keeps the gradient's direction.
+
+The optimizer is deterministic (no random numbers, fixed order of operations),
+runs on the CPU and optimizes a batch of trajectories at once: each row may have
+its own start and, through the cost function, its own cost. Batching pays where
+one network evaluates many rows: IRL plans D^phi for all demonstrations in one
+batch, and a learned intent's cold plan tries all its starting guesses in one.
+Different intents are planned one by one (:class:`PlannedIntent`), each warm
+started from its own previous plan, which is what keeps an inference step short.
+"""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from casa_core.intents import Intent
+
+#: Cost of states: takes a tensor ``(B, n, 4)`` and returns per-state costs ``(B, n)``.
+StateCost = Callable[[torch.Tensor], torch.Tensor]
+
+LIMITS = ("axis", "norm")
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Settings of the trajectory optimizer.
+
+    Attributes
+    ----------
+    horizon : float
+        T, seconds (15 in the original).
+    dt : float
+        Seconds between states (0.5 in the original).
+    speed : float
+        End-effector speed limit, m/s (the keyboard's 0.05).
+    rot_speed : float
+        Limit on the rate of rot, rad/s (the keyboard's 0.5).
+    limit : {"axis", "norm"}
+        ``"axis"``: ``speed`` bounds each Cartesian axis (keys held together add
+        up, as on the keyboard); ``"norm"``: ``speed`` bounds the Euclidean speed.
+    iterations : int
+        Most optimizer iterations from a cold start (steps all zero).
+    warm_iterations : int
+        Most iterations when warm started from a previous solution.
+    lr : float
+        Initial Adam step from a cold start, in units of the per-step limit.
+    warm_lr : float
+        Initial Adam step when warm started (the guess is already close).
+    decay : float
+        Factor applied to the step size at every iteration.
+    tol : float
+        Stop when no normalised step moves more than this in one iteration.
+    """
+
+    horizon: float = 15.0
+    dt: float = 0.5
+    speed: float = 0.05
+    rot_speed: float = 0.5
+    limit: str = "axis"
+    iterations: int = 400
+    warm_iterations: int = 60
+    lr: float = 0.5
+    warm_lr: float = 0.1
+    decay: float = 0.99
+    tol: float = 1e-4
+
+    def __post_init__(self):
+        if self.limit not in LIMITS:
+            raise ValueError(f"PlannerConfig.limit must be one of {LIMITS}, got {self.limit!r}")
+        for key in ("horizon", "dt", "speed", "rot_speed", "lr", "warm_lr", "tol"):
+            value = getattr(self, key)
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"PlannerConfig.{key} must be positive, got {value!r}")
+        if not 0 < self.decay <= 1:
+            raise ValueError(f"PlannerConfig.decay must be in (0, 1], got {self.decay!r}")
+        if self.iterations < 1 or self.warm_iterations < 1:
+            raise ValueError("PlannerConfig.iterations and warm_iterations must be >= 1")
+
+    @property
+    def n_steps(self) -> int:
+        """Steps in a full horizon (30 for T = 15 s, dt = 0.5 s)."""
+        return steps_left(self.horizon, self.dt)
+
+    def max_step(self) -> np.ndarray:
+        """Largest change of ``[x, y, z, rot]`` in one step: speed limits times ``dt``."""
+        return np.array([self.speed, self.speed, self.speed, self.rot_speed]) * self.dt
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Optimal trajectories of a batch.
+
+    Attributes
+    ----------
+    states : numpy.ndarray, shape (B, n + 1, 4)
+        The trajectories, the given starts included.
+    costs : numpy.ndarray, shape (B,)
+        Their costs (sum of the per-state cost over the states after the start).
+    iterations : int
+        Optimizer iterations run.
+    """
+
+    states: np.ndarray
+    costs: np.ndarray
+    iterations: int
+
+
+def steps_left(time_left: float, dt: float) -> int:
+    """Number of whole steps of ``dt`` in ``time_left`` seconds (never negative)."""
+    return max(int(np.floor(max(float(time_left), 0.0) / dt + 1e-9)), 0)
+
+
+def feasible(starts: np.ndarray, targets: np.ndarray, limit: str) -> np.ndarray:
+    """Walk from ``starts`` ``(B, 4)`` toward ``targets`` ``(B, n, 4)``, one limited step each.
+
+    Both in units of the per-step limit: a step is clipped to [-1, 1] on each
+    axis (``limit="axis"``) or its position part scaled to norm <= 1 and its rot
+    clipped (``limit="norm"``). States that are already feasible come back unchanged.
+    """
+    out = np.empty_like(targets)
+    previous = np.asarray(starts, dtype=float)
+    step = np.empty_like(previous)
+    for t in range(targets.shape[1]):
+        np.subtract(targets[:, t, :], previous, out=step)
+        if limit == "axis":
+            np.minimum(step, 1.0, out=step)
+            np.maximum(step, -1.0, out=step)
+        else:
+            norm = np.sqrt((step[:, :3] * step[:, :3]).sum(axis=1, keepdims=True))
+            step[:, :3] /= np.maximum(norm, 1.0)
+            step[:, 3] = np.minimum(np.maximum(step[:, 3], -1.0), 1.0)
+        np.add(previous, step, out=out[:, t, :])
+        previous = out[:, t, :]
+    return out
+
+
+def warm_start_from(states: np.ndarray, n_done: int, n_steps: int) -> np.ndarray:
+    """Initial guess ``(B, n_steps, 4)`` from a previous solution ``(B, m + 1, 4)``.
+
+    The first ``n_done`` steps, already taken, are dropped; the guess is cut or
+    padded (by holding the last state) to ``n_steps`` states after the start.
+    """
+    states = np.asarray(states, dtype=float)
+    rest = states[:, 1 + max(n_done, 0) :, :][:, :n_steps, :]
+    if rest.shape[1] == 0:
+        rest = states[:, -1:, :]
+    pad = n_steps - rest.shape[1]
+    if pad > 0:
+        rest = np.concatenate([rest, np.repeat(rest[:, -1:, :], pad, axis=1)], axis=1)
+    return rest
+
+
+def optimize(
+    state_cost: StateCost,
+    starts,
+    n_steps: int,
+    config: PlannerConfig | None = None,
+    warm_start=None,
+    initial_guess=None,
+    iterations: int | None = None,
+) -> Plan:
+    """Minimise the summed per-state cost over trajectories from ``starts``.
+
+    Parameters
+    ----------
+    state_cost : callable
+        Maps states ``(B, n, 4)`` (float64 tensor, metres and radians) to
+        per-state costs ``(B, n)``; must be differentiable in torch. Row b may
+        encode a different cost than row b' (batching across intents).
+    starts : array_like, shape (B, 4) or (4,)
+        First state of each trajectory.
+    n_steps : int
+        Number of steps (states after the start); 0 gives the start alone.
+    config : PlannerConfig, optional
+        Speed limits, ``dt`` and optimizer settings (defaults if None).
+    warm_start : array_like, shape (B, n_steps, 4), optional
+        States after the start to begin from (e.g. :func:`warm_start_from` a
+        previous :attr:`Plan.states`); made feasible first. Cold start (stay at
+        the start) if None. Runs ``config.warm_iterations`` from ``warm_lr``.
+    initial_guess : array_like, shape (B, n_steps, 4), optional
+        Like ``warm_start`` but run as a cold start (``config.iterations`` from
+        ``lr``): a rough guess such as a demonstration. Not both.
+    iterations : int, optional
+        Most iterations, instead of the config's (e.g. a short exploratory run).
+
+    Returns
+    -------
+    Plan
+        The optimized trajectories and their costs.
+    """
+    config = PlannerConfig() if config is None else config
+    starts_np = np.atleast_2d(np.asarray(starts, dtype=float))
+    if starts_np.ndim != 2 or starts_np.shape[1] != 4 or not np.isfinite(starts_np).all():
+        raise ValueError(f"starts must be finite states [x, y, z, rot], got {starts_np.shape}")
+    batch = starts_np.shape[0]
+    if n_steps < 0:
+        raise ValueError(f"n_steps must be >= 0, got {n_steps}")
+    if n_steps == 0:
+        return Plan(starts_np[:, None, :].copy(), np.zeros(batch), 0)
+    scale = config.max_step()
+    start_u = starts_np / scale
+    if warm_start is not None and initial_guess is not None:
+        raise ValueError("give warm_start or initial_guess, not both")
+    if warm_start is None and initial_guess is None:
+        guess = np.repeat(start_u[:, None, :], n_steps, axis=1)
+    else:
+        given = np.asarray(initial_guess if warm_start is None else warm_start, dtype=float)
+        if given.shape != (batch, n_steps, 4) or not np.isfinite(given).all():
+            raise ValueError(
+                f"warm_start/initial_guess must be finite with shape {(batch, n_steps, 4)}, "
+                f"got {given.shape}"
+            )
+        guess = given / scale
+    if warm_start is None:
+        budget, lr = config.iterations, config.lr
+    else:
+        budget, lr = config.warm_iterations, config.warm_lr
+    budget = budget if iterations is None else int(iterations)
+    states_u = feasible(start_u, guess, config.limit)
+    scale_t = torch.as_tensor(scale, dtype=torch.float64)
+    # Adam's moments, written out so that the feasibility step and decay stay explicit.
+    m = np.zeros_like(states_u)
+    v = np.zeros_like(states_u)
+    beta1, beta2, eps = 0.9, 0.999, 1e-12
+    iterations = 0
+    # Best iterate per row: on a non-convex cost Adam can leave a good guess behind.
+    best_u = states_u.copy()
+    best_cost = np.full(batch, np.inf)
+    for iterations in range(1, budget + 1):  # noqa: B007 (the count is reported)
+        x = torch.from_numpy(states_u).requires_grad_(True)
+        row_costs = state_cost(x * scale_t).sum(dim=1)
+        (grad,) = torch.autograd.grad(row_costs.sum(), x)
+        row_costs = row_costs.detach().numpy()
+        improved = row_costs < best_cost
+        best_cost[improved] = row_costs[improved]
+        best_u[improved] = states_u[improved]
+        grad = grad.numpy()
+        squared = grad * grad
+        if config.limit == "norm":
+            squared[..., :3] = squared[..., :3].mean(axis=-1, keepdims=True)
+        m = beta1 * m + (1 - beta1) * grad
+        v = beta2 * v + (1 - beta2) * squared
+        m_hat = m / (1 - beta1**iterations)
+        v_hat = v / (1 - beta2**iterations)
+        updated = feasible(start_u, states_u - lr * m_hat / (np.sqrt(v_hat) + eps), config.limit)
+        moved = float(np.abs(updated - states_u).max())
+        states_u = updated
+        lr *= config.decay
+        if moved < config.tol:
+            break
+    states = np.concatenate([starts_np[:, None, :], states_u * scale], axis=1)
+    with torch.no_grad():
+        costs = state_cost(torch.from_numpy(states[:, 1:, :])).sum(dim=1).numpy().copy()
+    keep = best_cost < costs
+    if keep.any():
+        states[keep, 1:, :] = best_u[keep] * scale
+        costs[keep] = best_cost[keep]
+    return Plan(states=states, costs=costs, iterations=iterations)
+
+
+class PlannedIntent(Intent):
+    """An intent whose cost is a differentiable per-state cost, planned by :func:`optimize`.
+
+    Subclasses implement :meth:`state_cost`. The cost of a trajectory is the sum
+    of the per-state cost over its states after the first, so one step from
+    ``a`` to ``b`` costs ``state_cost(b)``. Plans are cached per (state, steps
+    left) and each new plan is warm started from the latest one, advanced by the
+    steps taken since: along a trial, one inference step costs a short warm
+    started optimization instead of a cold one.
+
+    Parameters
+    ----------
+    name : str
+        Intent name.
+    planner : PlannerConfig, optional
+        Horizon, ``dt``, speed limits and optimizer settings (defaults if None).
+    cache_size : int
+        Plans kept (the assistant asks for the cost-to-go, the trajectory and the
+        distance at the same state; a trial has 31 inference states and the next
+        trial restarts from the same start, whose cold plan is the expensive one).
+    guides : sequence of array_like, optional
+        Trajectories ``(m + 1, 4)`` every ``dt`` (e.g. the mean demonstration of
+        a learned intent). A plan that cannot be warm started is optimized, in
+        one batch, from staying at the start and from each guide (its states
+        after the first, cut or padded to the steps left), and the cheapest
+        result is kept: a learned cost is not convex and a single start can
+        stall in a local minimum. The guides only seed the optimizer; the cost
+        alone decides.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        planner: PlannerConfig | None = None,
+        cache_size: int = 64,
+        guides=(),
+    ):
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"intent name must be a non-empty string, got {name!r}")
+        self.name = name
+        self.planner = PlannerConfig() if planner is None else planner
+        self.dt = self.planner.dt
+        self._cache: OrderedDict[tuple, Plan] = OrderedDict()
+        self._cache_size = cache_size
+        self._latest: tuple[int, np.ndarray] | None = None  # (steps left, states) of last plan
+        self.guides = [np.asarray(g, dtype=float).reshape(-1, 4) for g in guides]
+
+    @abstractmethod
+    def state_cost(self, states: torch.Tensor) -> torch.Tensor:
+        """Per-state cost ``(B, n)`` of states ``(B, n, 4)`` (float64), differentiable."""
+
+    def costs_of(self, states) -> np.ndarray:
+        """Per-state costs of states ``(n, 4)`` as a numpy array ``(n,)``."""
+        states = np.asarray(states, dtype=float).reshape(-1, 4)
+        with torch.no_grad():
+            return self.state_cost(torch.from_numpy(states)[None]).numpy()[0].copy()
+
+    def step_cost(self, state_from, state_to) -> float:
+        return float(self.costs_of(state_to)[0])
+
+    def prefix_cost(self, states) -> float:
+        states = np.asarray(states, dtype=float)
+        return float(self.costs_of(states[1:]).sum()) if len(states) > 1 else 0.0
+
+    def plan(self, state, time_left: float) -> Plan:
+        """The optimal trajectory from ``state`` with ``time_left`` seconds left (cached)."""
+        state = np.asarray(state, dtype=float).reshape(4)
+        n = steps_left(time_left, self.dt)
+        key = (state.tobytes(), n)
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            cached = self._cache[key]
+            if n > 0:  # later plans of this trial warm start from here
+                self._latest = (n, cached.states[0])
+            return cached
+        if self._latest is not None and 0 < n <= self._latest[0]:
+            previous_n, previous_states = self._latest
+            warm = warm_start_from(previous_states[None], previous_n - n, n)
+            result = optimize(self.state_cost, state[None], n, self.planner, warm_start=warm)
+        elif self.guides and n > 0:
+            stay = np.repeat(state[None, None, :], n, axis=1)
+            guesses = [warm_start_from(g[None], 0, n) for g in self.guides]
+            batch = optimize(
+                self.state_cost,
+                np.repeat(state[None], 1 + len(guesses), axis=0),
+                n,
+                self.planner,
+                initial_guess=np.concatenate([stay, *guesses]),
+            )
+            best = int(np.argmin(batch.costs))
+            result = Plan(
+                batch.states[best : best + 1], batch.costs[best : best + 1], batch.iterations
+            )
+        else:
+            result = optimize(self.state_cost, state[None], n, self.planner)
+        self._cache[key] = result
+        if len(self._cache) > self._cache_size:
+            self._cache.popitem(last=False)
+        if n > 0:
+            self._latest = (n, result.states[0])
+        return result
+
+    def cost_to_go(self, state, time_left: float) -> float:
+        return float(self.plan(state, time_left).costs[0])
+
+    def optimal_trajectory(self, state, time_left: float) -> np.ndarray:
+        return self.plan(state, time_left).states[0].copy()
+
+    def distance(self, state) -> float:
+        """Distance (m) to the end of the longest cached plan from ``state`` (or a new one)."""
+        state = np.asarray(state, dtype=float).reshape(4)
+        plans = [p for (s, _), p in self._cache.items() if s == state.tobytes()]
+        plan = max(plans, key=lambda p: p.states.shape[1]) if plans else None
+        if plan is None:
+            plan = self.plan(state, self.planner.horizon)
+        return float(np.linalg.norm(plan.states[0, -1, :3] - state[:3]))

@@ -1,0 +1,198 @@
+"""``casa bench``: how long one assistance step takes, and how it grows with the intents.
+
+One *assistance step* is what the assistant does at an inference step (twice per
+second): :meth:`Assistant.update` with the state reached (prefix costs, optimal
+costs-to-go, beta_hat, belief, arbitration, replanning u* when the most likely
+intent changes) plus one :meth:`Assistant.act` (the blended action). It is timed at
+a late step of a trial (``late_step`` = 24, t = 12 s of the 15 s horizon), after
+the assistant has been fed the trial so far, because that is where a real trial
+spends its time and where incremental bookkeeping pays or fails to.
+
+The trial is the Unknown Goal task's intended trajectory (the reference shown to
+participants), sampled every 0.5 s and moved by a random sub-millimetre offset, so
+that intents which cache plans by state (planned and neural intents) plan for real
+at the timed step, warm started from the previous step as in a trial. The assistant
+is fed the steps before the timed one once; each repetition times the step on a
+deep copy of it.
+
+Times are CPU time of the measuring thread (``time.thread_time_ns``), not wall
+time: the targets are for one core, and on a machine shared with other jobs wall
+time would also count the time the thread waited for a core.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from casa_core.assistant import Assistant
+from casa_core.intents import GoalIntent
+from casa_core.tasks import intended_trajectory
+
+#: Numbers of goal intents of the scaling measurement.
+SCALING_SIZES = (2, 4, 8, 16, 32, 64)
+#: Box (m) from which extra goals of the scaling measurement are drawn.
+WORKSPACE = (np.array([0.25, -0.4, 0.1]), np.array([0.6, 0.3, 0.4]))
+
+
+def bench_trajectory(layout: dict, dt: float = 0.5) -> np.ndarray:
+    """States ``(n, 4)`` every ``dt`` s of the Unknown Goal reference, held at its end."""
+    reference = intended_trajectory("unknown_goal", layout, dt=dt)[:, 1:]
+    n_needed = int(round(15.0 / dt)) + 1
+    if len(reference) < n_needed:
+        reference = np.vstack([reference, np.repeat(reference[-1:], n_needed - len(reference), 0)])
+    return reference
+
+
+def goal_intents(layout: dict, n: int, rng: np.random.Generator) -> list[GoalIntent]:
+    """``n`` goal intents: green, purple, red, then goals drawn uniformly in :data:`WORKSPACE`."""
+    goals = layout["goals"]
+    named = [GoalIntent(name, goals[name]) for name in ("green", "purple", "red")][:n]
+    extra = rng.uniform(*WORKSPACE, size=(max(n - len(named), 0), 3))
+    return named + [GoalIntent(f"goal{i}", goal) for i, goal in enumerate(extra)]
+
+
+def time_assistance_step(
+    make_intents: Callable[[], Sequence],
+    trajectory: np.ndarray,
+    rng: np.random.Generator,
+    late_step: int = 24,
+    repeats: int = 30,
+    warmup: int = 3,
+) -> float:
+    """Median CPU time (microseconds) of the assistance step ``late_step`` of a trial.
+
+    Parameters
+    ----------
+    make_intents : callable
+        Returns the intents (called once).
+    trajectory : numpy.ndarray, shape (n, 4)
+        States every inference step, the start first; ``n > late_step``.
+    rng : numpy.random.Generator
+        Draws the trajectory's sub-millimetre offset.
+    late_step : int
+        The timed inference step (the steps before it are fed untimed).
+    repeats : int
+        Repetitions; the median is returned.
+    warmup : int
+        Untimed repetitions first (the first calls of a process run cold).
+    """
+    if len(trajectory) <= late_step:
+        raise ValueError(f"trajectory has {len(trajectory)} states, needs > {late_step}")
+    user_action = np.array([0.0, 0.05, -0.05, 0.0])
+    states = trajectory + rng.uniform(-5e-4, 5e-4, size=(1, 4))
+    fed = Assistant(make_intents(), arbitration="confidence")
+    fed.reset(states[0])
+    for state in states[1:late_step]:
+        fed.update(state)
+    state = states[late_step]
+    times = []
+    for repeat in range(warmup + repeats):
+        # A copy of the fed assistant (caches and warm starts included) takes the step.
+        assistant = copy.deepcopy(fed)
+        start = time.thread_time_ns()
+        assistant.update(state)
+        assistant.act(state, user_action)
+        if repeat >= warmup:
+            times.append((time.thread_time_ns() - start) / 1e3)
+    return float(np.median(times))
+
+
+def linear_fit_r2(sizes, times) -> tuple[float, float, float]:
+    """Least-squares line ``time = a + b n``: returns ``(a, b, R^2)``."""
+    sizes, times = np.asarray(sizes, dtype=float), np.asarray(times, dtype=float)
+    b, a = np.polyfit(sizes, times, 1)
+    residual = times - (a + b * sizes)
+    r2 = 1.0 - residual @ residual / np.sum((times - times.mean()) ** 2)
+    return float(a), float(b), float(r2)
+
+
+def assistance_benchmarks(
+    layout: dict,
+    make_neural_intent: Callable[[], object] | None,
+    seed: int = 0,
+    repeats: int = 200,
+    neural_repeats: int = 20,
+) -> dict:
+    """``step_us_goal3``, ``step_us_neural1`` (None without a neural intent) and ``scaling``."""
+    rng = np.random.default_rng(seed)
+    trajectory = bench_trajectory(layout)
+    goals3 = goal_intents(layout, 3, rng)
+    results = {
+        "step_us_goal3": time_assistance_step(lambda: goals3, trajectory, rng, repeats=repeats)
+    }
+    if make_neural_intent is None:
+        results["step_us_neural1"] = None
+    else:
+        results["step_us_neural1"] = time_assistance_step(
+            lambda: [*goals3, make_neural_intent()], trajectory, rng, repeats=neural_repeats
+        )
+    scaling = []
+    for n in SCALING_SIZES:
+        intents = goal_intents(layout, n, rng)
+        step = time_assistance_step(
+            lambda intents=intents: intents, trajectory, rng, repeats=repeats
+        )
+        scaling.append({"n_intents": n, "step_us": step})
+    results["scaling"] = scaling
+    return results
+
+
+def format_table(results: dict) -> str:
+    """The results as a plain-text table, with the issue's targets."""
+    neural = results.get("step_us_neural1")
+    sizes = [row["n_intents"] for row in results["scaling"]]
+    times = [row["step_us"] for row in results["scaling"]]
+    _, slope, r2 = linear_fit_r2(sizes, times)
+    lines = [
+        "CPU time of one thread/process (see casa_core.robot.bench)",
+        f"{'measure':<44}{'value':>14}  target",
+        f"{'assistance step, 3 goal intents (us)':<44}{results['step_us_goal3']:>14.1f}  <= 200",
+        f"{'assistance step, + 1 neural intent (us)':<44}"
+        + (f"{neural:>14.1f}" if neural is not None else f"{'n/a':>14}")
+        + "  <= 20000",
+    ]
+    lines += [
+        f"{f'  {n} goal intents (us)':<44}{t:>14.1f}" for n, t in zip(sizes, times, strict=True)
+    ]
+    lines.append(f"{'  linear fit: us per intent, R^2':<44}{slope:>9.1f}, {r2:.3f}  linear")
+    if "trial_realtime_factor" in results:
+        lines.append(
+            f"{'15 s CASA trial, simulated s per CPU s':<44}"
+            f"{results['trial_realtime_factor']:>14.1f}  >= 100"
+        )
+    if "trial_realtime_factor_reused_sim" in results:
+        lines.append(
+            f"{'  the same, simulation kept open':<44}"
+            f"{results['trial_realtime_factor_reused_sim']:>14.1f}"
+        )
+    if "trial_realtime_factor_wall" in results:
+        lines.append(
+            f"{'  the same per wall-clock second':<44}"
+            f"{results['trial_realtime_factor_wall']:>14.1f}"
+        )
+    return "\n".join(lines)
+
+
+def untrained_neural_intent(layout: dict, seed: int = 0, planner=None):
+    """A neural intent as IRL makes them (:mod:`casa_core.irl`), untrained: same cost.
+
+    ``planner`` (a :class:`casa_core.planning.PlannerConfig`) defaults to IRL's.
+    """
+    from casa_core.irl import IRLConfig, NeuralIntent, cost_network, feature_names, scene_objects
+
+    config = IRLConfig()
+    names, positions = scene_objects(layout)
+    network = cost_network(len(feature_names(names)), config.hidden, config.negative_slope, seed)
+    return NeuralIntent(
+        "neural",
+        network,
+        names,
+        positions,
+        cost_scale=config.cost_scale,
+        length_scale=config.length_scale,
+        planner=config.planner if planner is None else planner,
+    )

@@ -1,0 +1,280 @@
+"""The simulated JACO arm: pybullet in the loop of a 20 Hz Cartesian velocity controller.
+
+Every control tick (``dt`` = 0.05 s) :meth:`ArmSimulation.step` takes a Cartesian
+velocity ``[vx, vy, vz, vrot]`` (the blended action), turns the Cartesian part into
+joint velocities through pybullet's Jacobian by damped least squares and the rotation
+into a turn of the last joint (NOTES section 1), lets pybullet's velocity motors
+drive the joints for ``dt`` and reads the end-effector pose and the joints back from
+pybullet. The tool orientation is held at :func:`~casa_core.robot.kinematics.ee_rotation`
+of the current ``rot``: only the last joint's turn changes it.
+
+To make the arm move at the commanded speed instead of drifting with integration
+errors, the controller tracks a reference pose integrated from the commands
+(feed-forward velocity plus a proportional correction). The reference is never allowed
+to run more than ``max_lag`` ahead of the arm, so that a blocked arm (table, joint
+limit) does not wind up and jump when released.
+
+Gravity is off: the real arm's firmware compensates it, and a sagging arm is not what
+a participant's keys ask for.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass
+from importlib.resources import files
+from pathlib import Path
+
+import numpy as np
+import pybullet as p
+
+from casa_core.robot import kinematics as kin
+from casa_core.robot.scene import SceneBodies, build_scene, check_layout
+
+URDF_PATH = Path(str(files("casa_core.robot").joinpath("j2s7s300.urdf")))
+
+TOOL_LINK = 7
+ARM_JOINTS = list(range(kin.N_JOINTS))
+
+
+@dataclass(frozen=True)
+class ControllerSettings:
+    """Gains of the Cartesian velocity controller.
+
+    Attributes
+    ----------
+    dt : float
+        Control tick (s); NOTES section 1: 0.05 s (20 Hz).
+    substeps : int
+        pybullet physics steps per tick.
+    damping : float
+        Damping of the least-squares Jacobian inverse (m); keeps joint speeds bounded
+        near singular configurations.
+    position_gain, orientation_gain : float
+        Proportional gains (1/s) pulling the arm onto the reference pose.
+    null_gain : float
+        Gain (1/s) of the null-space motion centring joints 2, 4, 6 in their limits.
+    max_lag : float
+        Largest distance (m, and rad for orientation) the reference may run ahead.
+    motor_force : float
+        Largest torque (N m) a velocity motor may apply.
+    """
+
+    dt: float = 0.05
+    substeps: int = 2
+    damping: float = 0.02
+    position_gain: float = 5.0
+    orientation_gain: float = 5.0
+    null_gain: float = 0.5
+    max_lag: float = 0.01
+    motor_force: float = 200.0
+
+
+_BOUNDED = np.isfinite(kin.JOINT_LOWER)
+_BOUNDED_INDEX = np.flatnonzero(_BOUNDED)
+_LOWER_B = kin.JOINT_LOWER[_BOUNDED_INDEX]
+_UPPER_B = kin.JOINT_UPPER[_BOUNDED_INDEX]
+_SPAN_B = _UPPER_B - _LOWER_B
+_EYE6 = np.eye(6)
+_MIDDLE_OR_ZERO = np.zeros(kin.N_JOINTS)
+_MIDDLE_OR_ZERO[_BOUNDED_INDEX] = (_LOWER_B + _UPPER_B) / 2
+
+
+def _limit_gradient(q: np.ndarray) -> np.ndarray:
+    """``|dH/dq|`` of the joint-limit index ``H = sum (u - l)^2 / (4 (u - q)(q - l))``.
+
+    Zero for unbounded joints; grows without bound as a joint reaches a limit.
+    """
+    bounded = q[_BOUNDED_INDEX]
+    to_lower = np.maximum(bounded - _LOWER_B, 1e-4)
+    to_upper = np.maximum(_UPPER_B - bounded, 1e-4)
+    gradient = np.zeros_like(q)
+    gradient[_BOUNDED_INDEX] = (
+        _SPAN_B**2 * np.abs(2 * bounded - _UPPER_B - _LOWER_B) / (4 * to_lower**2 * to_upper**2)
+    )
+    return gradient
+
+
+def _wrap(angle: float) -> float:
+    return float((angle + np.pi) % (2 * np.pi) - np.pi)
+
+
+class ArmSimulation:
+    """The JACO arm and the task scene in a pybullet client.
+
+    Parameters
+    ----------
+    layout : dict
+        Scene layout (``config/scene.yaml``).
+    gui : bool
+        Open a pybullet window (needs a display) instead of running headless.
+    settings : ControllerSettings, optional
+        Controller gains; default :class:`ControllerSettings` with the layout's
+        ``teleop.dt`` as the tick.
+
+    Notes
+    -----
+    The state the rest of the code sees is ``[x, y, z, rot]``: the tool position in the
+    robot base frame (m) and the angle of the last joint's turn (rad), unwrapped so that
+    it grows past pi when a participant keeps rotating. Use as a context manager or call
+    :meth:`close`.
+    """
+
+    def __init__(self, layout: dict, gui: bool = False, settings: ControllerSettings | None = None):
+        check_layout(layout)
+        if settings is None:
+            settings = ControllerSettings(dt=float(layout["teleop"]["dt"]))
+        self.settings = settings
+        self.layout = layout
+        self.gui = gui
+        if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            # pybullet's window needs X11 and would end the whole process without one.
+            raise RuntimeError(
+                "the pybullet window needs a display, but DISPLAY is not set: run in a "
+                "desktop session (or under xvfb-run for tests)"
+            )
+        self.client = p.connect(p.GUI if gui else p.DIRECT)
+        if self.client < 0:
+            raise RuntimeError("pybullet could not connect (no display for the GUI?)")
+        try:
+            p.setGravity(0, 0, 0, physicsClientId=self.client)
+            p.setTimeStep(self.settings.dt / self.settings.substeps, physicsClientId=self.client)
+            self.robot = p.loadURDF(str(URDF_PATH), useFixedBase=True, physicsClientId=self.client)
+            self.bodies: SceneBodies = build_scene(self.client, layout)
+        except Exception:
+            p.disconnect(self.client)
+            raise
+        self._joint_speed = kin.JOINT_MAX_SPEED
+        self._q = np.zeros(kin.N_JOINTS)
+        self._state = np.zeros(4)
+        self._reference = np.zeros(4)
+        self.reset(np.array([*layout["start"]["position"], layout["start"]["rot"]], dtype=float))
+
+    # -- lifecycle ---------------------------------------------------------------------
+    def close(self) -> None:
+        """Disconnect from pybullet (idempotent)."""
+        if self.client is not None and p.isConnected(self.client):
+            p.disconnect(self.client)
+        self.client = None
+
+    def __enter__(self) -> ArmSimulation:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # -- state -------------------------------------------------------------------------
+    @property
+    def state(self) -> np.ndarray:
+        """``[x, y, z, rot]`` as last read from pybullet (a copy)."""
+        return self._state.copy()
+
+    @property
+    def q(self) -> np.ndarray:
+        """Joint angles q1..q7 (rad) as last read from pybullet (a copy)."""
+        return self._q.copy()
+
+    def ee_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Tool position ``(3,)`` and rotation matrix ``(3, 3)`` read from pybullet now."""
+        link = p.getLinkState(
+            self.robot, TOOL_LINK, computeForwardKinematics=True, physicsClientId=self.client
+        )
+        rotation = np.array(p.getMatrixFromQuaternion(link[5])).reshape(3, 3)
+        return np.array(link[4]), rotation
+
+    def _read(self) -> None:
+        joints = p.getJointStates(self.robot, ARM_JOINTS, physicsClientId=self.client)
+        self._q = np.array([joint[0] for joint in joints])
+        position, rotation = self.ee_pose()
+        # Unwrap rot: add the wrapped change since the last reading.
+        rot = self._state[3] + _wrap(kin.rot_of(rotation) - self._state[3])
+        self._state = np.array([*position, rot])
+        self._rotation = rotation
+
+    def reset(self, state, q=None) -> np.ndarray:
+        """Put the arm at ``state`` = ``[x, y, z, rot]`` (by inverse kinematics) or at ``q``.
+
+        Returns the state read back from pybullet.
+        """
+        state = np.asarray(state, dtype=float)
+        if q is None:
+            q = kin.inverse_kinematics(state[:3], state[3])
+        for joint, angle in zip(ARM_JOINTS, q, strict=True):
+            p.resetJointState(self.robot, joint, angle, 0.0, physicsClientId=self.client)
+        self._state = np.array([0.0, 0.0, 0.0, state[3]])
+        self._read()
+        self._reference = self._state.copy()
+        return self.state
+
+    # -- control -----------------------------------------------------------------------
+    def joint_velocities(self, action) -> np.ndarray:
+        """Joint velocities realising the Cartesian velocity ``action`` from the current pose.
+
+        Returns the damped least-squares solution for the feed-forward velocity plus the
+        correction toward the reference pose, with ``vrot`` added to the last joint,
+        then advances the reference by ``action * dt``. A null-space term centres the
+        bounded joints; the result is scaled down uniformly when a joint would exceed
+        its speed limit.
+        """
+        s = self.settings
+        action = np.asarray(action, dtype=float)
+        if action.shape != (4,) or not np.all(np.isfinite(action)):
+            raise ValueError(f"action must be 4 finite numbers [vx, vy, vz, vrot], got {action}")
+        # How far the arm lags behind the reference at the start of this tick.
+        lag = np.minimum(np.maximum(self._reference - self._state, -s.max_lag), s.max_lag)
+        self._reference = self._state + lag + action * s.dt
+        target = kin.ee_rotation(self._state[3] + lag[3])
+        twist = np.concatenate(
+            [
+                action[:3] + s.position_gain * lag[:3],
+                s.orientation_gain * kin.orientation_error(target, self._rotation),
+            ]
+        )
+        zeros = [0.0] * kin.N_JOINTS
+        linear, angular = p.calculateJacobian(
+            self.robot,
+            TOOL_LINK,
+            [0.0, 0.0, 0.0],
+            self._q.tolist(),
+            zeros,
+            zeros,
+            physicsClientId=self.client,
+        )
+        jac = np.array((*linear, *angular))
+        # Weighted damped least squares (Chan and Dubey 1995): a bounded joint nearing a
+        # limit gets a heavy weight, so the redundant arm turns its other joints instead.
+        inv_weight = 1.0 / (1.0 + _limit_gradient(self._q))
+        weighted = jac * inv_weight
+        gram = weighted @ jac.T + s.damping**2 * _EYE6
+        # In the null space of the task, centre the bounded joints in their range:
+        # qdot = c + W^-1 J^T (J W^-1 J^T + damping^2 I)^-1 (twist - J c).
+        centring = (_MIDDLE_OR_ZERO - self._q) * _BOUNDED * s.null_gain
+        qdot = centring + weighted.T @ np.linalg.solve(gram, twist - jac @ centring)
+        # The rotate keys turn the last joint itself (NOTES section 1): its axis is the
+        # tool's z axis reversed, and turning it moves neither the cup nor that axis.
+        qdot[6] -= action[3]
+        excess = np.max(np.abs(qdot) / self._joint_speed)
+        return qdot / excess if excess > 1.0 else qdot
+
+    def step(self, action) -> np.ndarray:
+        """Drive the arm with Cartesian velocity ``action`` for one tick; return the new state.
+
+        Parameters
+        ----------
+        action : array_like, shape (4,)
+            ``[vx, vy, vz, vrot]`` in m/s and rad/s, base frame.
+        """
+        qdot = self.joint_velocities(action)
+        p.setJointMotorControlArray(
+            self.robot,
+            ARM_JOINTS,
+            p.VELOCITY_CONTROL,
+            targetVelocities=qdot.tolist(),
+            forces=[self.settings.motor_force] * kin.N_JOINTS,
+            physicsClientId=self.client,
+        )
+        for _ in range(self.settings.substeps):
+            p.stepSimulation(physicsClientId=self.client)
+        self._read()
+        return self.state

@@ -1,0 +1,27 @@
+"""Statistics for the CASA user study: tidy tables in, tidy tables out.
+
+``between``: the paper's analyses (ANOVA, ANCOVA, Tukey HSD, non-inferiority);
+``within``: the within-subjects ones (repeated-measures ANOVA, mixed model, Friedman,
+Wilcoxon with Holm); ``study``: hypotheses H1-H4 as one table and its APA Markdown report.
+Nothing here knows about robots or files.
+"""
+
+from casa_core.stats.between import ancova, anova, non_inferiority, tukey_hsd
+from casa_core.stats.study import STATS_COLUMNS, analyze_study, condition_of, report_markdown
+from casa_core.stats.within import friedman, holm, mixedlm, rm_anova, wilcoxon_holm
+
+__all__ = [
+    "STATS_COLUMNS",
+    "analyze_study",
+    "ancova",
+    "anova",
+    "condition_of",
+    "friedman",
+    "holm",
+    "mixedlm",
+    "non_inferiority",
+    "report_markdown",
+    "rm_anova",
+    "tukey_hsd",
+    "wilcoxon_holm",
+]

@@ -1,0 +1,76 @@
+"""Input checks and small helpers shared by the statistics modules.
+
+Two kinds of trouble are kept apart on purpose:
+
+* malformed input (a missing column, text where numbers belong) is a caller's mistake and
+  raises ``ValueError`` naming the column or row and the rule broken;
+* degenerate data (too few observations, a missing condition, zero variance) is a fact about
+  the study, so the public functions return their usual table with NaN statistics and a
+  ``note`` saying why the test was skipped.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+
+class Skipped(Exception):
+    """Raised inside an analysis when the data cannot support the test; the message says why."""
+
+
+def require_columns(data: pd.DataFrame, columns: Sequence[str], what: str) -> None:
+    """Raise ``ValueError`` naming the first column of ``columns`` missing from ``data``."""
+    if not isinstance(data, pd.DataFrame):
+        raise ValueError(f"{what}: data must be a pandas DataFrame, got {type(data).__name__}")
+    for column in columns:
+        if column not in data.columns:
+            raise ValueError(
+                f"{what}: column {column!r} is missing (columns present: {list(data.columns)})"
+            )
+
+
+def numeric_column(data: pd.DataFrame, column: str, what: str) -> pd.Series:
+    """``data[column]`` as floats; a non-numeric entry raises ``ValueError`` naming its row."""
+    values = pd.to_numeric(data[column], errors="coerce")
+    bad = values.isna() & data[column].notna()
+    if bad.any():
+        row = bad.idxmax()
+        raise ValueError(
+            f"{what}: column {column!r}, row {row}: {data[column][row]!r} is not a number"
+        )
+    if np.isinf(values.to_numpy(dtype=float)).any():
+        row = values.index[np.isinf(values.to_numpy(dtype=float))][0]
+        raise ValueError(f"{what}: column {column!r}, row {row}: value is infinite")
+    return values.astype(float)
+
+
+def levels(series: pd.Series) -> list:
+    """Distinct values of ``series`` in a stable order: category order, else sorted."""
+    if isinstance(series.dtype, pd.CategoricalDtype):
+        present = set(series.dropna())
+        return [c for c in series.cat.categories if c in present]
+    return sorted(series.dropna().unique(), key=str)
+
+
+def clean(data: pd.DataFrame, dv: str, factors: Sequence[str], what: str) -> pd.DataFrame:
+    """A copy with ``dv`` as float and rows lacking ``dv`` or any factor dropped."""
+    require_columns(data, [dv, *factors], what)
+    out = data[[dv, *factors]].copy()
+    out[dv] = numeric_column(data, dv, what)
+    out = out.dropna(subset=[dv, *factors])
+    for factor in factors:
+        # An absent level must not become an all-zero dummy column in a model.
+        if isinstance(out[factor].dtype, pd.CategoricalDtype):
+            out[factor] = out[factor].cat.remove_unused_categories()
+    return out
+
+
+def skipped_row(columns: Sequence[str], note: str, **known) -> pd.DataFrame:
+    """A one-row table with NaN statistics, the given known values and ``note``."""
+    row = {column: np.nan for column in columns}
+    row.update(known)
+    row["note"] = note
+    return pd.DataFrame([row], columns=[*columns, "note"])

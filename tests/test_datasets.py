@@ -1,0 +1,140 @@
+"""A raw dataset folder into its processed tables: contract columns, determinism, bad input."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import pandas as pd
+import pytest
+from test_logs_synthetic import SCENE, write_dataset
+
+from casa_core import datasets, logs, metrics
+
+# The column contract with users (issue 8); extra columns may follow.
+TRIALS = [
+    "dataset",
+    "participant",
+    "task",
+    "method",
+    "phase",
+    "source",
+    "error",
+    "efficiency",
+    "effort",
+    "effort_ticks",
+    "relative_effort",
+    "duration",
+]
+STEPS = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
+LIKERT = ["participant", "task", "method", "phase", "question", "score"]
+
+
+@pytest.fixture(scope="module")
+def raw(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("raw") / "pilot"
+    write_dataset(folder, participants=("p01", "p02"), seed=1)
+    return folder
+
+
+def test_tables_follow_the_column_contract(raw, tmp_path):
+    tables = datasets.process_dataset(raw, tmp_path, SCENE)
+    trials = pd.read_csv(tmp_path / "trials.csv")
+    steps = pd.read_csv(tmp_path / "steps.csv")
+    likert = pd.read_csv(tmp_path / "likert.csv")
+    assert list(trials.columns[: len(TRIALS)]) == TRIALS
+    assert list(steps.columns[: len(STEPS)]) == STEPS
+    assert set(LIKERT + ["dataset", "source"]) <= set(likert.columns)
+    assert len(trials) == 2 * 11 and (trials["dataset"] == "pilot").all()
+    assert len(likert) == 2 * 11 * 3
+    assert set(likert["source"]) == {"simulated"}  # from the trials: no source column
+    assert len(tables.validation) == 2 * 11 + 1 and set(tables.validation["status"]) == {"ok"}
+
+
+def test_trials_rows_are_the_metrics_of_each_log(raw, tmp_path):
+    trials = datasets.build_tables(raw, SCENE).trials.set_index("trial")
+    meta, frame = logs.read_trial(raw / "p02" / "unknown_skill_PBA_before_learning")
+    from casa_core import tasks
+
+    expected = metrics.trial_metrics(frame, tasks.intended_trajectory("unknown_skill", SCENE), 0.05)
+    row = trials.loc["p02/unknown_skill_PBA_before_learning"]
+    for key, value in expected.items():
+        assert row[key] == pytest.approx(value, rel=1e-12)
+    reference = trials.loc["p02/unknown_skill_NA_before_learning", "effort"]
+    assert row["relative_effort"] == pytest.approx(expected["effort"] / reference)
+
+
+def test_steps_are_long_one_row_per_tick_and_intent(raw):
+    steps = datasets.build_tables(raw, SCENE).steps
+    trial = steps[steps["trial"] == "p01/known_goal_CASA_no_misspecification"]
+    _, frame = logs.read_trial(raw / "p01" / "known_goal_CASA_no_misspecification")
+    assert len(trial) == 2 * len(frame)  # intents green and purple
+    green = trial[trial["intent"] == "green"].reset_index(drop=True)
+    pd.testing.assert_series_equal(green["beta"], frame["beta:green"], check_names=False)
+    pd.testing.assert_series_equal(green["alpha"], frame["alpha"], check_names=False)
+    # NA trials logged neither alpha nor intents: they have no steps.
+    assert not steps["method"].eq("NA").any()
+
+
+def test_same_raw_files_give_the_same_bytes(raw, tmp_path):
+    for out in ("a", "b"):
+        datasets.process_dataset(raw, tmp_path / out, SCENE)
+        datasets.write_validation([raw], tmp_path / out / "validation.csv")
+    for name in ("trials", "steps", "likert", "validation"):
+        a = (tmp_path / "a" / f"{name}.csv").read_bytes()
+        assert a == (tmp_path / "b" / f"{name}.csv").read_bytes(), name
+
+
+def _digests(folder):
+    return {p: hashlib.sha256(p.read_bytes()).digest() for p in logs.find_files(folder)}
+
+
+def _break(folder):
+    """Two bad trials with three problems, and a bad surveys.csv."""
+    json_path = folder / "p01" / "known_goal_PBA_no_misspecification.json"
+    meta = json.loads(json_path.read_text())
+    json_path.write_text(json.dumps({**meta, "method": "XX", "source": "robot"}))
+    csv_path = folder / "p02" / "unknown_goal_CASA_after_learning.csv"
+    csv_path.write_text(csv_path.read_text().replace("y+", "left", 1))
+    surveys = folder / "surveys.csv"
+    surveys.write_text(surveys.read_text() + "p09,known_goal,NA,no_misspecification,useful,9\n")
+
+
+def test_bad_files_stop_the_dataset_listing_every_problem(tmp_path):
+    write_dataset(tmp_path / "ds", participants=("p01", "p02"))
+    _break(tmp_path / "ds")
+    with pytest.raises(datasets.DatasetInvalid) as raised:
+        datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE)
+    rules = sorted(p.rule for p in raised.value.problems)
+    assert rules == ["enum", "enum", "keys", "likert-score"]
+    assert "3 file(s)" in str(raised.value) and "allow_invalid" in str(raised.value)
+    assert not (tmp_path / "out").exists()
+
+
+def test_allow_invalid_excludes_bad_files_and_lists_them(tmp_path):
+    write_dataset(tmp_path / "ds", participants=("p01", "p02"))
+    _break(tmp_path / "ds")
+    before = _digests(tmp_path / "ds")
+    tables = datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE, allow_invalid=True)
+    assert len(tables.trials) == 2 * 11 - 2
+    assert len(tables.likert) == 0  # the whole bad surveys.csv is excluded
+    assert pd.read_csv(tmp_path / "out" / "likert.csv").columns.tolist() == list(
+        datasets.LIKERT_COLUMNS
+    )
+    excluded = tables.validation[tables.validation["status"] == "excluded"]
+    assert sorted(set(excluded["file"])) == [
+        "p01/known_goal_PBA_no_misspecification.csv",
+        "p02/unknown_goal_CASA_after_learning.csv",
+        "surveys.csv",
+    ]
+    assert len(excluded) == 4  # one row per problem
+    assert _digests(tmp_path / "ds") == before  # raw files are never modified
+
+
+def test_a_dataset_without_na_or_surveys_still_builds(tmp_path):
+    conditions = [("unknown_goal", "CASA", "before_learning")]
+    write_dataset(tmp_path / "ds", participants=("p01",), surveys=False, conditions=conditions)
+    tables = datasets.build_tables(tmp_path / "ds", SCENE, dataset="lab")
+    assert tables.trials["relative_effort"].isna().all()  # no NA reference
+    assert tables.trials["dataset"].tolist() == ["lab"]
+    assert tables.likert.empty

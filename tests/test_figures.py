@@ -1,0 +1,497 @@
+"""Tests of the figures (issue 7): each figure is built from a small fixture table and the
+figure object is inspected (panels, series, labels, values).
+
+Expected bar heights and error bars are the closed forms mean = sum / n and standard error
+= sd / sqrt(n) (sd with n - 1) of the fixture values written in each test.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.collections import PathCollection
+from matplotlib.colors import to_hex
+from matplotlib.patches import Rectangle
+
+from casa_core.figures import (
+    arbitration_figure,
+    case_study_figure,
+    likert_figure,
+    objective_figure,
+    save_figure,
+    style,
+)
+from casa_core.figures.objective import parse_comparison, stars
+
+# --------------------------------------------------------------------------- fixtures
+
+#: Error of participants P1..P3 per (task, method, phase); other metrics derive from it.
+ERRORS = {
+    ("known_goal", "NA", "no_misspecification"): [1.0, 2.0, 3.0],
+    ("known_goal", "PBA", "no_misspecification"): [2.0, 2.0, 5.0],
+    ("known_goal", "CASA", "no_misspecification"): [0.5, 1.0, 1.5],
+    ("unknown_goal", "NA", "before_learning"): [1.0, 1.0, 4.0],
+    ("unknown_goal", "PBA", "before_learning"): [3.0, 4.0, 5.0],
+    ("unknown_goal", "CASA", "before_learning"): [1.0, 2.0, 3.0],
+    ("unknown_goal", "CASA", "after_learning"): [1.0, 1.5, 2.0],
+}
+
+
+def make_trials(errors=ERRORS, source="simulated") -> pd.DataFrame:
+    rows = []
+    for (task, method, phase), values in errors.items():
+        for i, value in enumerate(values):
+            rows.append(
+                {
+                    "dataset": "fixture",
+                    "participant": f"P{i + 1}",
+                    "task": task,
+                    "method": method,
+                    "phase": phase,
+                    "source": source,
+                    "error": value,
+                    "efficiency": value / 100,
+                    "effort": 10 * value,
+                    "effort_ticks": 10 * value,
+                    "relative_effort": value / 4,
+                    "duration": 20.0,
+                }
+            )
+    # A familiarization trial, which the figure must leave out.
+    rows.append(rows[0] | {"task": "familiarization", "phase": "familiarization"})
+    return pd.DataFrame(rows)
+
+
+def tukey(task, metric, comparison, p) -> dict:
+    return {
+        "hypothesis": "H1",
+        "analysis": "tukey",
+        "task": task,
+        "metric": metric,
+        "term": "method",
+        "comparison": comparison,
+        "p": p,
+    }
+
+
+def bars(ax) -> list[Rectangle]:
+    return [patch for patch in ax.patches if isinstance(patch, Rectangle)]
+
+
+def bar_heights_by_colour(ax) -> dict[str, list[float]]:
+    out: dict[str, list[float]] = {}
+    for patch in bars(ax):
+        out.setdefault(to_hex(patch.get_facecolor()), []).append(patch.get_height())
+    return out
+
+
+def closed_form_se(values) -> float:
+    mean = sum(values) / len(values)
+    return math.sqrt(sum((v - mean) ** 2 for v in values) / (len(values) - 1) / len(values))
+
+
+def texts(fig) -> str:
+    """All text of the figure, whitespace normalised (captions are wrapped)."""
+    words = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
+    return " ".join(words.split())
+
+
+# --------------------------------------------------------------------------- style
+
+
+@pytest.mark.parametrize(
+    "method, phase, condition",
+    [
+        ("NA", "no_misspecification", "NA"),
+        ("CASA", "no_misspecification", "CASA"),
+        ("CASA", "before_learning", "CASA before learning"),
+        ("CASA", "after_learning", "CASA after learning"),
+        ("PBA", "before_learning", "PBA"),
+        ("NA", "after_learning", "NA after learning"),
+    ],
+)
+def test_condition_names_follow_the_paper(method, phase, condition):
+    # The task text: "CASA before learning" = method CASA with phase before_learning, etc.
+    assert style.condition_of(method, phase) == condition
+
+
+def test_condition_of_rejects_unknown_method():
+    with pytest.raises(ValueError, match="unknown method 'XX'"):
+        style.condition_of("XX", "before_learning")
+
+
+def test_every_condition_has_a_distinct_colour():
+    colours = [style.METHOD_COLOURS[c] for c in style.CONDITIONS]
+    assert len(set(colours)) == len(colours)
+
+
+def test_intent_colours_keep_the_goal_colour_after_learning():
+    colours = style.intent_colours(["green", "purple", "learned_red", "pour", "other"])
+    assert colours["green"] == style.GOAL_COLOURS["green"]
+    assert colours["learned_red"] == style.GOAL_COLOURS["red"]
+    assert colours["pour"] != colours["other"]
+    assert colours["pour"] not in style.GOAL_COLOURS.values()
+
+
+def test_save_figure_writes_vector_pdf_and_200_dpi_png(tmp_path):
+    from PIL import Image
+
+    fig = objective_figure(make_trials())
+    written = save_figure(fig, tmp_path / "out" / "objective")
+    pdf, png = tmp_path / "out" / "objective.pdf", tmp_path / "out" / "objective.png"
+    assert written == [pdf, png]
+    assert pdf.read_bytes().startswith(b"%PDF")
+    # Vector: the PDF draws the bars and text, it embeds no raster image.
+    assert b"/Subtype /Image" not in pdf.read_bytes()
+    with Image.open(png) as image:
+        assert image.info["dpi"] == pytest.approx((200, 200), abs=0.01)
+    # Atomic writes leave no temporary file behind.
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
+        "objective.pdf",
+        "objective.png",
+    ]
+
+
+def test_save_figure_is_reproducible(tmp_path):
+    fig = objective_figure(make_trials())
+    save_figure(fig, tmp_path / "a")
+    save_figure(fig, tmp_path / "b")
+    assert (tmp_path / "a.pdf").read_bytes() == (tmp_path / "b.pdf").read_bytes()
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "b.png").read_bytes()
+
+
+# --------------------------------------------------------------------------- objective
+
+
+def test_objective_has_three_labelled_panels_with_tasks_along_x():
+    fig = objective_figure(make_trials())
+    axes = fig.axes
+    assert len(axes) == 3
+    labels = [ax.get_ylabel() for ax in axes]
+    assert labels[0].startswith("Error (") and labels[1].startswith("Efficiency cost (")
+    assert labels[2] == "Effort (key presses / NA)"
+    ticks = [t.get_text() for t in axes[0].get_xticklabels()]
+    # Familiarization is not a compared task; Unknown Skill has no fixture trials.
+    assert ticks == ["Known\nGoal", "Unknown\nGoal"]
+    assert "simulated participants (n = 3)" in texts(fig)
+    assert "No trials for Unknown Skill" in texts(fig)
+
+
+def test_objective_bars_are_means_with_standard_errors():
+    fig = objective_figure(make_trials())
+    heights = bar_heights_by_colour(fig.axes[0])
+    # Known Goal then Unknown Goal, in each colour's order of appearance.
+    na = ERRORS[("known_goal", "NA", "no_misspecification")]
+    na_unknown = ERRORS[("unknown_goal", "NA", "before_learning")]
+    assert heights[style.METHOD_COLOURS["NA"].lower()] == pytest.approx([2.0, 2.0])
+    assert heights[style.METHOD_COLOURS["PBA"].lower()] == pytest.approx([3.0, 4.0])
+    assert heights[style.METHOD_COLOURS["CASA"].lower()] == pytest.approx([1.0])
+    assert heights[style.METHOD_COLOURS["CASA before learning"].lower()] == pytest.approx([2.0])
+    assert heights[style.METHOD_COLOURS["CASA after learning"].lower()] == pytest.approx([1.5])
+    # Error bars: the first errorbar drawn is Known Goal NA, mean 2, SE = 1 / sqrt(3).
+    caps = fig.axes[0].containers
+    first = next(c for c in caps if c.__class__.__name__ == "ErrorbarContainer")
+    segment = first.lines[2][0].get_segments()[0]
+    assert segment[1][1] - segment[0][1] == pytest.approx(2 * closed_form_se(na))
+    assert closed_form_se(na) == pytest.approx(1 / math.sqrt(3))
+    assert closed_form_se(na_unknown) == pytest.approx(1.0)
+
+
+def test_objective_draws_every_participant_as_a_point():
+    fig = objective_figure(make_trials())
+    ax = fig.axes[0]
+    scatters = [c for c in ax.collections if isinstance(c, PathCollection)]
+    points = np.concatenate([c.get_offsets() for c in scatters])
+    n_points = sum(len(v) for v in ERRORS.values())
+    assert len(points) == n_points
+    assert sorted(points[:, 1]) == pytest.approx(sorted(sum(ERRORS.values(), [])))
+
+
+def test_objective_brackets_come_from_significant_tukey_rows():
+    stats = pd.DataFrame(
+        [
+            tukey("known_goal", "error", "CASA vs NA", 0.0005),
+            tukey("known_goal", "error", "CASA vs PBA", 0.3),  # not significant
+            tukey("known_goal", "efficiency", "PBA vs NA", 0.02),
+            # Pooled row and per-task row: the per-task row decides for Unknown Goal.
+            tukey("unknown_goal+unknown_skill", "error", "CASA before learning vs PBA", 0.001),
+            tukey("unknown_goal", "error", "CASA before learning vs PBA", 0.2),
+            # A skipped test: stats.csv keeps its row, with no comparison and no p.
+            tukey("known_goal", "relative_effort", np.nan, np.nan),
+        ]
+    )
+    fig = objective_figure(make_trials(), stats)
+    labels = [[t.get_text() for t in ax.texts] for ax in fig.axes]
+    assert labels == [["***"], ["*"], []]
+    assert "Tukey HSD" in texts(fig)
+
+
+def test_objective_draws_a_pooled_row_where_no_task_row_exists():
+    stats = pd.DataFrame(
+        [tukey("unknown_goal+unknown_skill", "error", "CASA before learning - PBA", 0.004)]
+    )
+    fig = objective_figure(make_trials(), stats)
+    assert [t.get_text() for t in fig.axes[0].texts] == ["**"]
+    assert "pooled over the tasks" in texts(fig)
+
+
+@pytest.mark.parametrize(
+    "p, code", [(0.0009, "***"), (0.001, "**"), (0.0099, "**"), (0.01, "*"), (0.05, "")]
+)
+def test_stars_thresholds(p, code):
+    assert stars(p) == code
+
+
+def test_parse_comparison_spellings():
+    assert parse_comparison("CASA vs NA") == ("CASA", "NA")
+    assert parse_comparison("CASA before learning - PBA") == ("CASA before learning", "PBA")
+    assert parse_comparison("casa_after_learning vs. na") == ("CASA after learning", "NA")
+    with pytest.raises(ValueError, match="unknown condition 'Magic'"):
+        parse_comparison("Magic vs NA")
+    with pytest.raises(ValueError, match="not of the form"):
+        parse_comparison("CASA")
+
+
+def test_objective_notes_missing_conditions():
+    errors = {k: v for k, v in ERRORS.items() if k[1] != "PBA"}
+    fig = objective_figure(make_trials(errors))
+    assert "Known Goal: no PBA." in texts(fig)
+    assert "Unknown Goal: no PBA." in texts(fig)
+
+
+def test_objective_says_human_participants_for_human_data():
+    fig = objective_figure(make_trials(source="human"))
+    assert "human participants" in texts(fig)
+    assert "simulated" not in texts(fig)
+
+
+def test_objective_rejects_bad_input():
+    with pytest.raises(ValueError, match="trials: missing column.*relative_effort"):
+        objective_figure(make_trials().drop(columns="relative_effort"))
+    bad = make_trials()
+    bad.loc[2, "method"] = "ZZ"
+    with pytest.raises(ValueError, match="trials row 2: unknown method 'ZZ'"):
+        objective_figure(bad)
+    stats = pd.DataFrame([tukey("known_goal", "error", "CASA versus", 0.01)])
+    with pytest.raises(ValueError, match="stats row 0"):
+        objective_figure(make_trials(), stats)
+
+
+# --------------------------------------------------------------------------- likert
+
+
+def make_likert() -> pd.DataFrame:
+    rows = []
+    scores = {"NA": [1, 2, 3], "PBA": [5, 6, 7], "CASA": [4, 4, 7]}
+    for method, values in scores.items():
+        for i, score in enumerate(values):
+            for question in ("understood", "effortless", "useful"):
+                rows.append(
+                    {
+                        "participant": f"P{i + 1}",
+                        "task": "known_goal",
+                        "method": method,
+                        "phase": "no_misspecification",
+                        "question": question,
+                        "score": score,
+                        "source": "simulated",
+                    }
+                )
+    return pd.DataFrame(rows)
+
+
+def test_likert_panels_questions_and_means():
+    fig = likert_figure(make_likert())
+    assert [ax.get_title() for ax in fig.axes] == ["Known Goal", "Unknown Goal", "Unknown Skill"]
+    known = fig.axes[0]
+    assert [t.get_text() for t in known.get_xticklabels()] == [
+        "Understood",
+        "Effortless",
+        "Useful",
+    ]
+    assert known.get_ylim() == pytest.approx((1, 7.2))
+    heights = bar_heights_by_colour(known)
+    # Means of the scores written in make_likert, once per question.
+    assert heights[style.METHOD_COLOURS["NA"].lower()] == pytest.approx([2.0] * 3)
+    assert heights[style.METHOD_COLOURS["CASA"].lower()] == pytest.approx([5.0] * 3)
+    # Tasks without answers keep their panel, with a note.
+    assert [t.get_text() for t in fig.axes[1].texts] == ["no survey answers\nfor Unknown Goal"]
+    assert "simulated participants (n = 3)" in texts(fig)
+
+
+@pytest.mark.parametrize("score", [0, 8, 3.5, "x"])
+def test_likert_rejects_scores_off_the_scale(score):
+    likert = make_likert()
+    likert["score"] = likert["score"].astype(object)
+    likert.loc[4, "score"] = score
+    with pytest.raises(ValueError, match="likert row 4: score"):
+        likert_figure(likert)
+
+
+def test_likert_rejects_unknown_question():
+    likert = make_likert()
+    likert.loc[1, "question"] = "fun"
+    with pytest.raises(ValueError, match="likert row 1: question 'fun'"):
+        likert_figure(likert)
+
+
+# --------------------------------------------------------------------------- arbitration
+
+
+def make_arbitration() -> pd.DataFrame:
+    t = np.arange(0.0, 5.5, 0.5)
+    rows = []
+    for name, belief, beta in (
+        ("green", 0.5 + t / 11, 0.1 * t),
+        ("purple", 0.5 - t / 11, 0.05 * t),
+    ):
+        for i, ti in enumerate(t):
+            rows.append(
+                {
+                    "t": ti,
+                    "intent": name,
+                    "belief": belief[i],
+                    "beta": beta[i],
+                    "alpha_distance": 1 - ti / 10,
+                    "alpha_belief": 1 - 2 * t[i] / 11,
+                    "alpha_confidence": 1.0,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def test_arbitration_panels_and_series():
+    table = make_arbitration()
+    fig = arbitration_figure(table, epsilon=1.0)
+    axes = fig.axes_by_name
+    assert set(axes) == {"belief", "confidence", "alpha"}
+    belief_lines = {line.get_label(): line for line in axes["belief"].get_lines()}
+    assert set(belief_lines) == {"green", "purple"}
+    assert to_hex(belief_lines["green"].get_color()) == style.GOAL_COLOURS["green"].lower()
+    green = table[table["intent"] == "green"]
+    assert belief_lines["green"].get_ydata() == pytest.approx(green["belief"].to_numpy())
+    alpha_labels = [line.get_label() for line in axes["alpha"].get_lines()]
+    assert alpha_labels == ["distance (PBA)", "belief", "confidence (CASA)"]
+    alpha_lines = axes["alpha"].get_lines()
+    # One alpha per time, not one per (time, intent) row.
+    assert len(alpha_lines[0].get_xdata()) == table["t"].nunique()
+    # The threshold line and its label are on the confidence axes, inside the y range.
+    assert axes["confidence"].get_ylim()[1] > 1.0
+    assert axes["confidence"].get_xlabel() == "Time (s)"
+
+
+def test_arbitration_rejects_alphas_that_differ_between_intents():
+    table = make_arbitration()
+    table.loc[len(table) - 1, "alpha_distance"] = 0.123
+    with pytest.raises(ValueError, match="alpha columns differ between intents"):
+        arbitration_figure(table)
+
+
+def test_arbitration_rejects_missing_column_and_text():
+    with pytest.raises(ValueError, match="arbitration: missing column.*alpha_belief"):
+        arbitration_figure(make_arbitration().drop(columns="alpha_belief"))
+    table = make_arbitration()
+    table["beta"] = table["beta"].astype(object)
+    table.loc[3, "beta"] = "high"
+    with pytest.raises(ValueError, match="arbitration row 3: beta 'high' is not a number"):
+        arbitration_figure(table)
+
+
+# --------------------------------------------------------------------------- case study
+
+
+def make_steps(participant="expert") -> pd.DataFrame:
+    t = np.arange(0.0, 3.0, 0.5)
+    rows = []
+
+    def add(task, method, phase, betas, alpha):
+        for i, ti in enumerate(t):
+            for name, beta in betas.items():
+                rows.append(
+                    {
+                        "participant": participant,
+                        "task": task,
+                        "method": method,
+                        "phase": phase,
+                        "t": ti,
+                        "alpha": alpha[i],
+                        "intent": name,
+                        "beta": beta * ti,
+                        "belief": 0.5,
+                    }
+                )
+
+    down = 1 - t / 3
+    add("known_goal", "CASA", "no_misspecification", {"green": 0.5, "purple": 0.1}, down)
+    add("known_goal", "PBA", "no_misspecification", {"green": 1.0, "purple": 1.0}, down / 2)
+    add("unknown_goal", "CASA", "before_learning", {"green": 0.1, "purple": 0.05}, t * 0 + 1)
+    add("unknown_goal", "PBA", "before_learning", {"green": 1.0, "purple": 1.0}, down)
+    add("unknown_goal", "CASA", "after_learning", {"green": 0.1, "red": 0.6}, down)
+    return pd.DataFrame(rows)
+
+
+def test_case_study_rows_columns_and_series():
+    fig = case_study_figure(make_steps(), epsilon=1.0)
+    grid = fig.axes_grid
+    assert list(grid) == ["known_goal", "unknown_goal"]
+    before, after, alpha = grid["unknown_goal"]
+    assert {line.get_label() for line in after.get_lines()} >= {"green", "red"}
+    red = next(line for line in after.get_lines() if line.get_label() == "red")
+    assert to_hex(red.get_color()) == style.GOAL_COLOURS["red"].lower()
+    assert red.get_ydata() == pytest.approx(0.6 * np.arange(0.0, 3.0, 0.5))
+    labels = [line.get_label() for line in alpha.get_lines()]
+    assert labels == ["PBA", "CASA before learning", "CASA after learning"]
+    known_after = grid["known_goal"][1]
+    assert "nothing to learn" in known_after.texts[0].get_text()
+    assert [line.get_label() for line in grid["known_goal"][2].get_lines()] == ["PBA", "CASA"]
+    assert "participant expert" in texts(fig)
+    # Row labels in the paper's words.
+    assert "Known Goal" in [t.get_text() for t in grid["known_goal"][0].texts]
+
+
+def test_case_study_chooses_the_named_participant():
+    steps = pd.concat([make_steps("a"), make_steps("b")], ignore_index=True)
+    steps.loc[steps["participant"] == "b", "beta"] *= 2
+    fig = case_study_figure(steps, participant="b")
+    green = next(
+        line for line in fig.axes_grid["known_goal"][0].get_lines() if line.get_label() == "green"
+    )
+    assert green.get_ydata() == pytest.approx(2 * 0.5 * np.arange(0.0, 3.0, 0.5))
+    with pytest.raises(ValueError, match="no rows for participant 'c'"):
+        case_study_figure(steps, participant="c")
+
+
+def test_case_study_rejects_duplicate_rows():
+    steps = make_steps()
+    steps = pd.concat([steps, steps.iloc[[0]]], ignore_index=True)
+    with pytest.raises(ValueError, match="two rows for t = 0.0 and intent 'green'"):
+        case_study_figure(steps)
+
+
+def test_brackets_sit_above_their_data_and_do_not_collide():
+    from casa_core.figures import _bars
+
+    fig = style.new_figure(3, 2)
+    ax = fig.subplots()
+    ax.set_ylim(0, 10)
+    # Two brackets meeting at x = 1 and one spanning both, all over data up to 5.
+    _bars.draw_brackets(ax, [(0.0, 1.0, 5.0, "*"), (1.0, 2.0, 5.0, "**"), (0.0, 2.0, 5.0, "***")])
+    heights = {t.get_text(): t.get_position()[1] for t in ax.texts}
+    assert min(heights.values()) > 5.0
+    assert heights["*"] != heights["**"]
+    assert heights["***"] > max(heights["*"], heights["**"])
+    # The axis grows to hold the highest bracket.
+    assert ax.get_ylim()[1] > heights["***"]
+
+
+def test_objective_notes_a_metric_the_dataset_lacks():
+    trials = make_trials()
+    trials["efficiency"] = np.nan
+    fig = objective_figure(trials)
+    efficiency = fig.axes[1]
+    assert [t.get_text() for t in efficiency.texts] == ["no efficiency cost in the data"]
+    assert not bars(efficiency)
+    assert bars(fig.axes[0]) and bars(fig.axes[2])

@@ -1,0 +1,68 @@
+"""``casa validate``: every problem printed with file, where and rule; the exit code."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+from test_logs_synthetic import write_dataset
+
+from casa_core import datasets
+from casa_core.cli import main
+
+
+def test_valid_folder_exits_0(tmp_path, capsys):
+    write_dataset(
+        tmp_path / "ds",
+        participants=("p01",),
+        conditions=[("known_goal", "NA", "no_misspecification")],
+    )
+    assert main(["validate", str(tmp_path / "ds")]) == 0
+    assert "2 file(s) checked, 0 invalid, 0 problem(s)" in capsys.readouterr().err
+
+
+def test_bad_files_are_all_listed_and_exit_1(tmp_path, capsys):
+    stems = write_dataset(tmp_path / "ds", participants=("p01", "p02"), surveys=False)
+    meta_path = stems[0].with_name(stems[0].name + ".json")
+    meta_path.write_text(json.dumps({**json.loads(meta_path.read_text()), "source": "lab"}))
+    lone = tmp_path / "ds" / "p02" / "lone.json"
+    lone.write_text("{}")
+    assert main(["validate", str(tmp_path / "ds"), str(tmp_path / "missing")]) == 1
+    err = capsys.readouterr().err
+    assert f"{meta_path}: key 'source': [enum] is 'lab'" in err
+    assert f"{tmp_path / 'ds' / 'p02' / 'lone.csv'}: [pair]" in err
+    assert f"{lone}: key 'participant': [required-key] missing" in err
+    assert f"{tmp_path / 'missing'}: [exists]" in err
+    # 2 x 11 trials, the lone one and the missing path; 3 of them bad.
+    assert "24 file(s) checked, 3 invalid" in err
+
+
+def test_report_and_allow_invalid(tmp_path, capsys):
+    stems = write_dataset(tmp_path / "ds", participants=("p01",), surveys=False)
+    csv_path = stems[1].with_name(stems[1].name + ".csv")
+    csv_path.write_text(csv_path.read_text().replace(",", ";", 1))
+    report = tmp_path / "out" / "validation.csv"
+    assert main(["validate", str(tmp_path / "ds"), "--report", str(report)]) == 1
+    table = datasets.read_table(report)
+    assert table.columns.tolist() == list(datasets.VALIDATION_COLUMNS)
+    assert (table["status"] == "invalid").sum() >= 1 and (table["status"] == "ok").sum() == 10
+    assert main(["validate", str(tmp_path / "ds"), "--report", str(report), "--allow-invalid"]) == 0
+    table = datasets.read_table(report)
+    bad = table[table["status"] == "excluded"]
+    assert set(bad["file"]) == {csv_path.relative_to(tmp_path / "ds").as_posix()}
+    assert "excluded" in capsys.readouterr().err
+
+
+def test_process_command_writes_the_tables(tmp_path, capsys):
+    write_dataset(tmp_path / "ds", participants=("p01",))
+    scene = str(datasets.Path(__file__).resolve().parents[1] / "config" / "scene.yaml")
+    out = tmp_path / "processed"
+    assert main(["process", str(tmp_path / "ds"), "--out", str(out), "--scene", scene]) == 0
+    trials = datasets.read_table(out / "trials.csv")
+    # "NA" stays a method, not a missing value.
+    assert sorted(trials["method"].unique()) == ["CASA", "NA", "PBA"]
+    assert "11 trial(s)" in capsys.readouterr().out
+    (tmp_path / "ds" / "p01" / "known_goal_NA_no_misspecification.json").write_text("[]")
+    assert main(["process", str(tmp_path / "ds"), "--out", str(out), "--scene", scene]) == 1
+    assert "[json-object]" in capsys.readouterr().err
+    pd.testing.assert_frame_equal(datasets.read_table(out / "trials.csv"), trials)  # untouched

@@ -1,0 +1,193 @@
+"""``casa teleop``: headless through the same code path, then once in a real window (Xvfb)."""
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import pybullet as p
+import pytest
+import yaml
+
+from casa_core import logs
+from casa_core.cli import build_parser
+from casa_core.robot import teleop
+from casa_core.study.trial import ScriptedKeys, run_teleop
+
+
+@pytest.fixture(scope="module")
+def layout():
+    with open("config/scene.yaml", encoding="utf-8") as handle:
+        return yaml.safe_load(handle)
+
+
+def test_headless_teleop_writes_a_valid_log_and_never_overwrites(layout, tmp_path):
+    script = ScriptedKeys([(1.0, ["x+", "z-"]), (0.5, ["rot+"])])
+    stem = run_teleop(
+        layout, "unknown_skill", "PBA", "h7", tmp_path, gui=False, key_source=script, countdown=0
+    )
+    assert stem == tmp_path / "unknown_skill_before_learning_PBA"
+    assert logs.validate_paths([tmp_path]) == []
+    meta, frame = logs.read_trial(stem)
+    assert meta["participant"] == "h7" and meta["source"] == "simulated"
+    assert "started_at" in meta
+    assert (frame["keys"][:20] == "x+ z-").all() and (frame["keys"][20:30] == "rot+").all()
+    with pytest.raises(FileExistsError, match="never overwritten"):
+        run_teleop(
+            layout, "unknown_skill", "PBA", "h7", tmp_path, gui=False, key_source=ScriptedKeys([])
+        )
+
+
+@pytest.mark.parametrize(
+    ("task", "method", "phase", "rule"),
+    [
+        ("known_goal", "BELIEF", None, "enum"),
+        ("known_goal", "CASA", "after_learning", "task-phase"),
+        ("unknown_goal", "PBA", "after_learning", "phase-method"),
+    ],
+)
+def test_teleop_refuses_a_trial_it_could_not_log_before_opening_a_window(
+    layout, tmp_path, task, method, phase, rule
+):
+    with pytest.raises(ValueError, match=rule):
+        run_teleop(layout, task, method, "h1", tmp_path, phase=phase, gui=True)
+    assert not list(tmp_path.iterdir())
+
+
+def test_keyboard_events_become_held_keys_and_enter_ends(monkeypatch):
+    events = {
+        p.B3G_UP_ARROW: p.KEY_IS_DOWN,
+        ord("a"): p.KEY_WAS_TRIGGERED | p.KEY_WAS_RELEASED,  # a tap within one tick
+        ord("s"): p.KEY_WAS_RELEASED,  # released before this tick: not held
+        ord("q"): p.KEY_IS_DOWN,  # not a control key
+    }
+    monkeypatch.setattr(p, "getKeyboardEvents", lambda physicsClientId=0: events)
+    keyboard = teleop.KeyboardKeys(client=0)
+    assert keyboard.keys(0.0, None) == {"x+", "rot+"}
+    assert not keyboard.done
+    events[p.B3G_RETURN] = p.KEY_WAS_TRIGGERED
+    assert keyboard.keys(0.05, None) == frozenset()
+    assert keyboard.done
+
+
+def test_bindings_cover_the_eight_keys_once():
+    assert sorted(teleop.KEY_BINDINGS.values()) == sorted(
+        ["x+", "x-", "y+", "y-", "z+", "z-", "rot+", "rot-"]
+    )
+
+
+def test_cli_has_teleop_and_bench():
+    parser = build_parser()
+    args = parser.parse_args(
+        ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "a", "--out", "d"]
+    )
+    assert args.func.__name__ == "_teleop" and args.scene == "config/scene.yaml"
+    assert parser.parse_args(["bench", "--json"]).json
+
+
+WINDOW_SCRIPT = textwrap.dedent(
+    """
+    import sys
+    import pybullet as p
+    import yaml
+    from casa_core.study.trial import ScriptedKeys, run_teleop
+
+    class KeysAndKeyboard(ScriptedKeys):
+        # Scripted keys, while polling the window's keyboard as the real source does.
+        def keys(self, t, state):
+            assert isinstance(p.getKeyboardEvents(), dict)
+            return super().keys(t, state)
+
+    with open("config/scene.yaml", encoding="utf-8") as handle:
+        layout = yaml.safe_load(handle)
+    source = KeysAndKeyboard([(0.5, ["y+"]), (0.5, ["z+"])])
+    run_teleop(layout, "known_goal", "CASA", "w1", sys.argv[1], key_source=source,
+               countdown=1, realtime=False)
+    """
+)
+
+
+@pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb is not on PATH: no display")
+def test_teleop_in_a_real_window_under_xvfb(tmp_path):
+    display_pipe_r, display_pipe_w = os.pipe()
+    server = subprocess.Popen(
+        [
+            "Xvfb",
+            "-displayfd",
+            str(display_pipe_w),
+            "-screen",
+            "0",
+            "1024x768x24",
+            "-nolisten",
+            "tcp",
+        ],
+        pass_fds=(display_pipe_w,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        os.close(display_pipe_w)
+        with os.fdopen(display_pipe_r) as pipe:
+            display = pipe.readline().strip()
+        assert display, "Xvfb did not report a display number"
+        env = {**os.environ, "DISPLAY": f":{display}"}
+        run = subprocess.run(
+            [sys.executable, "-c", WINDOW_SCRIPT, str(tmp_path)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert run.returncode == 0, run.stderr[-2000:]
+        # pybullet's GUI prints its OpenGL context: a window was really opened.
+        assert "Created GL" in run.stdout, run.stdout[-2000:]
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
+    stem = tmp_path / "known_goal_no_misspecification_CASA"
+    assert logs.validate_paths([tmp_path]) == []
+    _, frame = logs.read_trial(stem)
+    assert list(frame["keys"][:10]) == ["y+"] * 10
+
+
+def test_learned_intent_files_join_the_known_goals_after_learning(layout, tmp_path):
+    from casa_core.irl import IRLConfig
+    from casa_core.library import save_intent
+    from casa_core.planning import PlannerConfig
+    from casa_core.robot.bench import untrained_neural_intent
+    from casa_core.study.trial import trial_intents
+
+    # A short planner keeps the test fast; the log, not the plan, is under test here.
+    quick = PlannerConfig(iterations=20, warm_iterations=5)
+    path = save_intent(
+        tmp_path / "library",
+        untrained_neural_intent(layout, seed=1, planner=quick),
+        task="unknown_goal",
+        participant="h1",
+        seed=1,
+        demos=[],
+        history=[],
+        config=IRLConfig(),
+    )
+    intents = trial_intents(layout, [path])
+    assert [intent.name for intent in intents] == ["green", "purple", "neural"]
+    script = ScriptedKeys([(1.0, ["y+"])])
+    stem = run_teleop(
+        layout,
+        "unknown_goal",
+        "CASA",
+        "h1",
+        tmp_path / "logs",
+        phase="after_learning",
+        gui=False,
+        key_source=script,
+        countdown=0,
+        intents=intents,
+    )
+    meta, frame = logs.read_trial(stem)
+    assert meta["intents"] == ["green", "purple", "neural"]
+    assert frame["beta:neural"].iloc[-1] > 0
+    (tmp_path / "broken.intent.json").write_text("{", encoding="utf-8")
+    with pytest.raises(ValueError, match="broken.intent.json"):
+        trial_intents(layout, [tmp_path / "broken.intent.json"])

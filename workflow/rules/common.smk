@@ -1,0 +1,91 @@
+# Config validation, dataset discovery and the list of outputs. No rules here.
+import re
+from pathlib import Path
+
+from snakemake.utils import validate
+
+
+validate(config, "../schemas/config.schema.yaml")
+# `--config allow_invalid=true` gives the string "true"; the schema admits only these spellings.
+config["allow_invalid"] = str(config["allow_invalid"]).lower() == "true"
+
+# Switched on in workflow/rules/study.smk once `casa simulate` and `casa case-study`
+# exist: the simulated study then becomes the dataset data/raw/simulated, and the
+# case study's tables and figures join the default target.
+SIMULATE = False
+CASE_STUDY = False
+
+RAW = Path("data/raw")
+PROCESSED = Path("data/processed")
+FIGURES = Path("figures")
+# Dataset names become folder and file names: keep them portable.
+DATASET_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
+# Outputs of the dataset-independent rules live here; no dataset may take the name.
+RESERVED = ("case_study",)
+# Datasets that rules of this workflow write into data/raw (the simulated study).
+GENERATED = ("simulated",) if SIMULATE else ()
+
+
+def discover_datasets():
+    """The folders of data/raw (hidden ones skipped), plus the datasets rules generate."""
+    found = set(GENERATED)
+    if RAW.is_dir():
+        found |= {p.name for p in RAW.iterdir() if p.is_dir() and not p.name.startswith(".")}
+    for name in sorted(found):
+        if not DATASET_NAME.fullmatch(name) or name in RESERVED:
+            raise ValueError(
+                f"data/raw/{name}: a dataset folder name must match "
+                f"{DATASET_NAME.pattern} and not be one of {', '.join(RESERVED)}; rename it"
+            )
+    return sorted(found)
+
+
+DATASETS = discover_datasets()
+
+
+wildcard_constraints:
+    ds="|".join(re.escape(d) for d in DATASETS) or "(?!)",
+
+
+def raw_files(wildcards):
+    """Every non-hidden file of a dataset, so that a changed or added log reruns it."""
+    if wildcards.ds in GENERATED:
+        return [RAW / wildcards.ds / ".complete"]
+    files = []
+    for path in sorted((RAW / wildcards.ds).rglob("*")):
+        parts = path.relative_to(RAW).parts
+        if path.is_file() and not any(part.startswith(".") for part in parts):
+            files.append(str(path))
+    return files
+
+
+def has_surveys(ds):
+    """Whether a dataset has Likert answers; generated datasets always do."""
+    return ds in GENERATED or any((RAW / ds).rglob("surveys.csv"))
+
+
+def likert_option(wildcards, input):
+    """Pass the Likert table to the statistics only when the dataset has surveys."""
+    return f"--likert {input.likert}" if has_surveys(wildcards.ds) else ""
+
+
+def allow_invalid_flag(wildcards=None):
+    return "--allow-invalid" if config["allow_invalid"] else ""
+
+
+def dataset_outputs(ds):
+    tables = ["trials", "steps", "likert", "stats", "validation"]
+    outputs = [str(PROCESSED / ds / f"{name}.csv") for name in tables]
+    outputs.append(str(PROCESSED / ds / "stats.md"))
+    figures = ["objective"] + (["likert"] if has_surveys(ds) else [])
+    outputs += [str(FIGURES / ds / f"{f}.{ext}") for f in figures for ext in ("pdf", "png")]
+    return outputs
+
+
+def all_outputs():
+    outputs = [out for ds in DATASETS for out in dataset_outputs(ds)]
+    outputs.append(str(FIGURES / "scene.png"))
+    if CASE_STUDY:
+        outputs += [str(PROCESSED / "case_study" / f) for f in ("steps.csv", "arbitration.csv")]
+        outputs += [str(FIGURES / f"{f}.{e}") for f in ("case_study", "arbitration") for e in ("pdf", "png")]
+    return outputs

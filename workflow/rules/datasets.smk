@@ -1,0 +1,42 @@
+# Per dataset: check every raw file against casa-trial/1, then build its tables.
+# Raw files are only read. A bad file stops this dataset (every problem is listed
+# in the log and on the console); with allow_invalid=true bad files are excluded
+# and listed in validation.csv.
+
+
+rule validate:
+    input:
+        raw_files,
+    output:
+        PROCESSED / "{ds}" / "validation.csv",
+    params:
+        raw=lambda wildcards: RAW / wildcards.ds,
+        allow_invalid=allow_invalid_flag,
+    log:
+        "logs/validate/{ds}.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa validate {params.raw} --report {output} {params.allow_invalid} 2>&1 | tee {log}"
+
+
+rule process:
+    input:
+        raw_files,
+        validation=PROCESSED / "{ds}" / "validation.csv",
+        scene=config["scene"],
+    output:
+        trials=PROCESSED / "{ds}" / "trials.csv",
+        steps=PROCESSED / "{ds}" / "steps.csv",
+        likert=PROCESSED / "{ds}" / "likert.csv",
+    params:
+        raw=lambda wildcards: RAW / wildcards.ds,
+        out=lambda wildcards: PROCESSED / wildcards.ds,
+        allow_invalid=allow_invalid_flag,
+    log:
+        "logs/process/{ds}.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa process {params.raw} --out {params.out} --scene {input.scene} "
+        "--dataset {wildcards.ds} {params.allow_invalid} > {log} 2>&1"

@@ -1,0 +1,101 @@
+# Figures: per dataset (objective metrics, Likert answers) and dataset-independent
+# (scene, case study, arbitration comparison). `casa figure KIND ... --out STEM`
+# writes STEM.pdf and STEM.png.
+
+
+rule figure_objective:
+    input:
+        trials=PROCESSED / "{ds}" / "trials.csv",
+        stats=PROCESSED / "{ds}" / "stats.csv",
+    output:
+        pdf=FIGURES / "{ds}" / "objective.pdf",
+        png=report(
+            FIGURES / "{ds}" / "objective.png",
+            caption="../report/objective.rst",
+            category="{ds}",
+            subcategory="figures",
+        ),
+    params:
+        stem=lambda wildcards: FIGURES / wildcards.ds / "objective",
+    log:
+        "logs/figures/{ds}/objective.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa figure objective --trials {input.trials} --stats {input.stats} "
+        "--out {params.stem} > {log} 2>&1"
+
+
+rule figure_likert:
+    input:
+        likert=PROCESSED / "{ds}" / "likert.csv",
+    output:
+        pdf=FIGURES / "{ds}" / "likert.pdf",
+        png=report(
+            FIGURES / "{ds}" / "likert.png",
+            caption="../report/likert.rst",
+            category="{ds}",
+            subcategory="figures",
+        ),
+    params:
+        stem=lambda wildcards: FIGURES / wildcards.ds / "likert",
+    log:
+        "logs/figures/{ds}/likert.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa figure likert --likert {input.likert} --out {params.stem} > {log} 2>&1"
+
+
+rule figure_scene:
+    input:
+        scene=config["scene"],
+    output:
+        report(FIGURES / "scene.png", caption="../report/scene.rst", category="scene"),
+    log:
+        "logs/figures/scene.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa figure scene --scene {input.scene} --out {output} > {log} 2>&1"
+
+
+rule figure_arbitration:
+    input:
+        arbitration=PROCESSED / "case_study" / "arbitration.csv",
+    output:
+        pdf=FIGURES / "arbitration.pdf",
+        png=report(
+            FIGURES / "arbitration.png",
+            caption="../report/arbitration.rst",
+            category="case study",
+        ),
+    params:
+        stem=FIGURES / "arbitration",
+    log:
+        "logs/figures/arbitration.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa figure arbitration --arbitration {input.arbitration} --out {params.stem} "
+        "> {log} 2>&1"
+
+
+rule figure_case_study:
+    input:
+        steps=PROCESSED / "case_study" / "steps.csv",
+    output:
+        pdf=FIGURES / "case_study.pdf",
+        png=report(
+            FIGURES / "case_study.png",
+            caption="../report/case_study.rst",
+            category="case study",
+        ),
+    params:
+        stem=FIGURES / "case_study",
+    log:
+        "logs/figures/case_study.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa figure case_study --steps {input.steps} --out {params.stem} > {log} 2>&1"

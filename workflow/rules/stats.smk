@@ -1,0 +1,24 @@
+# Per dataset: the statistics of H1-H4 (casa_core.stats), as a table and a report.
+
+
+rule stats:
+    input:
+        trials=PROCESSED / "{ds}" / "trials.csv",
+        likert=PROCESSED / "{ds}" / "likert.csv",
+    output:
+        csv=PROCESSED / "{ds}" / "stats.csv",
+        md=report(
+            PROCESSED / "{ds}" / "stats.md",
+            caption="../report/stats.rst",
+            category="{ds}",
+            subcategory="statistics",
+        ),
+    params:
+        likert=likert_option,
+    log:
+        "logs/stats/{ds}.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa stats --trials {input.trials} {params.likert} "
+        "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"
