@@ -23,6 +23,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_figure(commands)
     _add_learn(commands)
     _add_library(commands)
+    _add_simulate(commands)
+    _add_case_study(commands)
     return parser
 
 
@@ -345,6 +347,107 @@ def _library_list(args) -> int:
     for problem in problems:
         print(f"casa library: {problem}", file=sys.stderr)
     return 1 if problems else 0
+
+
+def _load_config(path: str) -> tuple[dict, dict]:
+    """The workflow config and the scene layout it names (read once, at the edge)."""
+    import yaml
+
+    with open(path) as handle:
+        config = yaml.safe_load(handle)
+    with open(config["scene"]) as handle:
+        scene = yaml.safe_load(handle)
+    return config, scene
+
+
+def _add_simulate(commands) -> None:
+    command = commands.add_parser(
+        "simulate", help="simulate one participant of the study (one stage per call)"
+    )
+    command.add_argument(
+        "stage",
+        choices=["before", "learn", "after", "learning-table"],
+        help="before: phases 1-3 and demonstrations; learn: one unknown "
+        "task's intent; after: CASA after learning and the surveys; "
+        "learning-table: gather the learn rows into one CSV",
+    )
+    command.add_argument("--config", default="config/config.yaml", help="workflow config")
+    command.add_argument(
+        "--participant", type=int, default=1, metavar="INDEX", help="1-based participant number"
+    )
+    command.add_argument("--rows", nargs="*", default=[], help="learning-table: learn CSVs")
+    command.add_argument("--out", required=True, help="folder (before/after) or CSV (learn)")
+    command.add_argument("--before", help="the participant's before-learning folder")
+    command.add_argument("--task", choices=["unknown_goal", "unknown_skill"], help="learn: task")
+    command.add_argument("--library", help="learn/after: the participant's intent library")
+    command.set_defaults(func=_simulate)
+
+
+def _simulate(args) -> int:
+    from pathlib import Path
+
+    import pandas as pd
+
+    from casa_core import logs
+    from casa_core.study import simulate
+
+    if args.stage == "learning-table":
+        from casa_core.datasets import read_table
+
+        rows = [read_table(path) for path in sorted(args.rows)]
+        table = pd.concat(rows, ignore_index=True).sort_values(["participant", "task"])
+        logs.atomic_write_text(args.out, logs.frame_to_csv_text(table))
+        print(f"casa simulate learning-table: {len(table)} learned intent(s) -> {args.out}")
+        return 0
+    config, scene = _load_config(args.config)
+    simulation = config["simulation"]
+    index = args.participant - 1
+    pid = simulate.participant_id(index)
+    if args.stage == "before":
+        written = simulate.simulate_before_learning(index, scene, simulation, Path(args.out))
+    elif args.stage == "learn":
+        row = simulate.learn_from_demonstrations(
+            Path(args.before),
+            args.task,
+            scene,
+            int(simulation["seed"]) + index,
+            Path(args.library),
+            pid,
+        )
+        logs.atomic_write_text(args.out, logs.frame_to_csv_text(pd.DataFrame([row])))
+        written = [args.out]
+    else:
+        learned = sorted(Path(args.library).rglob("*.intent.json"))
+        written = simulate.simulate_after_learning(
+            index, scene, simulation, learned, Path(args.before), Path(args.out)
+        )
+    print(f"casa simulate {args.stage}: participant {pid}, {len(written)} file(s)")
+    return 0
+
+
+def _add_case_study(commands) -> None:
+    command = commands.add_parser(
+        "case-study", help="the expert case study and the arbitration comparison"
+    )
+    command.add_argument("--config", default="config/config.yaml", help="workflow config")
+    command.add_argument("--work", required=True, help="folder for the expert's logs and intents")
+    command.add_argument("--steps", required=True, help="steps.csv to write")
+    command.add_argument("--arbitration", required=True, help="arbitration.csv to write")
+    command.set_defaults(func=_case_study)
+
+
+def _case_study(args) -> int:
+    from pathlib import Path
+
+    from casa_core import logs
+    from casa_core.study import simulate
+
+    config, scene = _load_config(args.config)
+    steps, arbitration = simulate.run_case_study(scene, config["case_study"], Path(args.work))
+    logs.atomic_write_text(args.steps, logs.frame_to_csv_text(steps))
+    logs.atomic_write_text(args.arbitration, logs.frame_to_csv_text(arbitration))
+    print(f"casa case-study: {len(steps)} step row(s), {len(arbitration)} arbitration row(s)")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,4 +1,4 @@
-"""Simulated participants, the protocol schedule, the Likert model and the arbitration comparison."""
+"""Simulated participants, the protocol, the Likert model and the arbitration comparison."""
 
 import numpy as np
 import pandas as pd

@@ -8,12 +8,14 @@ from snakemake.utils import validate
 validate(config, "../schemas/config.schema.yaml")
 # `--config allow_invalid=true` gives the string "true"; the schema admits only these spellings.
 config["allow_invalid"] = str(config["allow_invalid"]).lower() == "true"
+# The config file the package commands read (the last --configfile, else the default).
+CONFIG_FILE = workflow.overwrite_configfiles[-1] if workflow.overwrite_configfiles else "config/config.yaml"
 
 # Switched on in workflow/rules/study.smk once `casa simulate` and `casa case-study`
 # exist: the simulated study then becomes the dataset data/raw/simulated, and the
 # case study's tables and figures join the default target.
-SIMULATE = False
-CASE_STUDY = False
+SIMULATE = True
+CASE_STUDY = True
 
 RAW = Path("data/raw")
 PROCESSED = Path("data/processed")

@@ -1,51 +1,108 @@
-# The simulated study, learning and the expert case study (issue 4) go here.
-#
-# Not wired yet: `casa simulate` and `casa case-study` do not exist at the time of
-# writing (`casa learn` does). When they land:
-#   1. write the rules below, per participant so that --cores 2 keeps both cores
-#      busy, with simulation and learning as separate jobs;
-#   2. set SIMULATE = True and CASE_STUDY = True in common.smk.
-# The rest of the DAG is already written against their outputs:
-#   - data/raw/simulated/.complete marks a finished simulated study; the folder
-#     then holds casa-trial/1 logs and surveys.csv files (one per participant is
-#     fine), like any dataset, and is checked, processed, analysed and drawn as one;
-#   - data/processed/case_study/steps.csv and .../arbitration.csv feed the rules
-#     figure_case_study and figure_arbitration (workflow/rules/figures.smk).
-#
-# A sketch; the options of `casa simulate` and `casa case-study` are still to be
-# settled with their authors:
-#
-# PARTICIPANTS = [f"p{i:02d}" for i in range(1, config["simulation"]["participants"] + 1)]
-#
-# rule simulate_before_learning:   # familiarization, NA/PBA/CASA, the demonstrations
-#     output: directory(RAW / "simulated" / "{participant}" / "before")
-#     params: seed=config["simulation"]["seed"]
-#     log: "logs/simulate/{participant}_before.log"
-#     conda: "../envs/casa.yaml"
-#     shell: "casa simulate --participant {wildcards.participant} --seed {params.seed} ..."
-#
-# rule learn:                      # one job per participant and unknown task
-#     input: RAW / "simulated" / "{participant}" / "before"
-#     output: directory("data/interim/simulated/{participant}/library/{task}")
-#     log: "logs/learn/{participant}_{task}.log"
-#     conda: "../envs/casa.yaml"
-#     shell: "casa learn --demos {input} --task {wildcards.task} --name {wildcards.task} "
-#            "--library {output} --participant {wildcards.participant} > {log} 2>&1"
-#
-# rule simulate_after_learning:    # CASA after learning, with the learned intents
-#     input: ...the participant's libraries...
-#     output: directory(RAW / "simulated" / "{participant}" / "after")
-#     ...
-#
-# rule simulated_study:            # the marker the dataset rules wait for
-#     input: expand(RAW / "simulated" / "{participant}" / "after", participant=PARTICIPANTS)
-#     output: touch(RAW / "simulated" / ".complete")
-#     log: "logs/simulate/complete.log"
-#
-# rule case_study:
-#     output:
-#         steps=PROCESSED / "case_study" / "steps.csv",
-#         arbitration=PROCESSED / "case_study" / "arbitration.csv",
-#     log: "logs/case_study.log"
-#     conda: "../envs/casa.yaml"
-#     shell: "casa case-study --scene {input.scene} ... > {log} 2>&1"
+# The simulated study (paper, Sec. V), learning, and the expert case study (Sec. IV).
+# Per participant: simulation before learning, learning of each unknown task and
+# simulation after learning are separate jobs, so that --cores 2 keeps both busy.
+# The simulated study is the dataset data/raw/simulated; .complete marks it done.
+
+PARTICIPANTS = list(range(1, config["simulation"]["participants"] + 1))
+SIMULATED = RAW / "simulated"
+INTENTS = PROCESSED / "simulated" / "intents"
+UNKNOWN_TASKS = ("unknown_goal", "unknown_skill")
+
+
+wildcard_constraints:
+    p=r"\d+",
+    task="|".join(UNKNOWN_TASKS),
+
+
+rule simulate_before_learning:
+    input:
+        config=CONFIG_FILE,
+        scene=config["scene"],
+    output:
+        directory(SIMULATED / "p{p}" / "before"),
+    log:
+        "logs/simulate/p{p}_before.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa simulate before --config {input.config} --participant {wildcards.p} "
+        "--out {output} > {log} 2>&1"
+
+
+rule learn_intent:
+    input:
+        before=SIMULATED / "p{p}" / "before",
+        config=CONFIG_FILE,
+    output:
+        library=directory(INTENTS / "p{p}" / "{task}"),
+        row=PROCESSED / "simulated" / "learning" / "p{p}_{task}.csv",
+    log:
+        "logs/learn/p{p}_{task}.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa simulate learn --config {input.config} --participant {wildcards.p} "
+        "--task {wildcards.task} --before {input.before} --library {output.library} "
+        "--out {output.row} > {log} 2>&1"
+
+
+rule simulate_after_learning:
+    input:
+        before=SIMULATED / "p{p}" / "before",
+        config=CONFIG_FILE,
+        libraries=expand(INTENTS / "p{{p}}" / "{task}", task=UNKNOWN_TASKS),
+    output:
+        directory(SIMULATED / "p{p}" / "after"),
+    params:
+        library=lambda wildcards: INTENTS / f"p{wildcards.p}",
+    log:
+        "logs/simulate/p{p}_after.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa simulate after --config {input.config} --participant {wildcards.p} "
+        "--before {input.before} --library {params.library} --out {output} > {log} 2>&1"
+
+
+rule learning_table:
+    input:
+        expand(
+            PROCESSED / "simulated" / "learning" / "p{p}_{task}.csv",
+            p=PARTICIPANTS,
+            task=UNKNOWN_TASKS,
+        ),
+    output:
+        PROCESSED / "simulated" / "learning.csv",
+    log:
+        "logs/simulate/learning_table.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa simulate learning-table --rows {input} --out {output} > {log} 2>&1"
+
+
+rule simulated_study:
+    input:
+        expand(SIMULATED / "p{p}" / "after", p=PARTICIPANTS),
+        PROCESSED / "simulated" / "learning.csv",
+    output:
+        touch(SIMULATED / ".complete"),
+    log:
+        "logs/simulate/complete.log",
+
+
+rule case_study:
+    input:
+        config=CONFIG_FILE,
+        scene=config["scene"],
+    output:
+        steps=PROCESSED / "case_study" / "steps.csv",
+        arbitration=PROCESSED / "case_study" / "arbitration.csv",
+        work=directory("data/interim/case_study"),
+    log:
+        "logs/case_study.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa case-study --config {input.config} --work {output.work} "
+        "--steps {output.steps} --arbitration {output.arbitration} > {log} 2>&1"

@@ -1,0 +1,56 @@
+"""CI: every expected figure exists, is a valid, non-blank PDF or PNG, and has its panels.
+
+Panels are counted on the figure objects rebuilt from the same processed tables.
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+from matplotlib.image import imread
+
+from casa_core import datasets, figures
+
+PROCESSED, FIGS = Path("data/processed"), Path("figures")
+problems = []
+
+
+def check_file(path: Path) -> None:
+    if not path.is_file() or path.stat().st_size == 0:
+        problems.append(f"{path}: missing or empty")
+    elif path.suffix == ".pdf" and not path.read_bytes().startswith(b"%PDF"):
+        problems.append(f"{path}: not a PDF")
+    elif path.suffix == ".png":
+        image = imread(path)
+        if image.ndim < 2 or float(np.std(image)) < 1e-3:
+            problems.append(f"{path}: blank image")
+
+
+def check_panels(name: str, figure, expected: int) -> None:
+    panels = [axis for axis in figure.axes if axis.has_data()]
+    if len(panels) < expected:
+        problems.append(f"{name}: {len(panels)} panel(s) with data, expected {expected}")
+
+
+for stem in ["arbitration", "case_study", "simulated/objective", "simulated/likert"]:
+    for ext in ("pdf", "png"):
+        check_file(FIGS / f"{stem}.{ext}")
+check_file(FIGS / "scene.png")
+
+read = datasets.read_table
+simulated = PROCESSED / "simulated"
+check_panels(
+    "objective",
+    figures.objective_figure(read(simulated / "trials.csv"), read(simulated / "stats.csv")),
+    3,
+)
+check_panels("likert", figures.likert_figure(read(simulated / "likert.csv")), 3)
+check_panels(
+    "arbitration", figures.arbitration_figure(read(PROCESSED / "case_study/arbitration.csv")), 2
+)
+check_panels("case_study", figures.case_study_figure(read(PROCESSED / "case_study/steps.csv")), 6)
+
+for problem in problems:
+    print(f"check_figures: {problem}", file=sys.stderr)
+print(f"check_figures: {'FAILED' if problems else 'all figures present and complete'}")
+sys.exit(1 if problems else 0)

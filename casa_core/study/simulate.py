@@ -1,0 +1,298 @@
+"""The simulated study and the expert case study, run through the robot in pybullet.
+
+Each participant is simulated in three separate jobs so that a workflow can
+spread them over cores: :func:`simulate_before_learning` (familiarization, Known
+Goal, the unknown tasks before learning and the demonstrations),
+:func:`learn_from_demonstrations` (one per unknown task) and
+:func:`simulate_after_learning` (CASA with the learned intents, then the Likert
+answers). Every random draw comes from ``seed`` through
+``numpy.random.default_rng([seed, participant_index, stream])``, so a
+participant's trials do not depend on how many participants there are.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from casa_core import logs, metrics
+from casa_core.study import likert, protocol
+from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
+from casa_core.study.trial import run_trial, trial_intents
+from casa_core.tasks import intended_trajectory
+
+#: Name of the intent learned for each unknown task (colours follow the goal's name).
+LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
+#: Seconds at the end of a CASA trial over which every beta_hat must stay below epsilon.
+DETECTION_WINDOW = 3.0
+#: Stream numbers of default_rng([seed, index, stream]).
+PARAMS_STREAM, LIKERT_STREAM = 0, 9999
+
+
+def participant_id(index: int) -> str:
+    """``p01``, ``p02``, ... for the 0-based ``index``."""
+    return f"p{index + 1:02d}"
+
+
+def participant_params(index: int, simulation: dict) -> ParticipantParams:
+    """The participant's operator parameters, drawn from the population of the config."""
+    rng = np.random.default_rng([simulation["seed"], index, PARAMS_STREAM])
+    return draw_participants(1, simulation["population"], rng)[0]
+
+
+def misspecification_detected(frame: pd.DataFrame, epsilon: float) -> bool:
+    """Whether every known intent's beta_hat stayed below epsilon over the trial's last seconds."""
+    betas = frame[[c for c in frame.columns if c.startswith("beta:")]]
+    if betas.empty:
+        return False
+    recent = frame["t"] >= frame["t"].iloc[-1] - DETECTION_WINDOW
+    return bool((betas[recent] < epsilon).all().all())
+
+
+def _run(scene, spec, params, rng, pid, seed, max_duration, sim, intents=None, notes=None):
+    reference = intended_trajectory(spec.task, scene)
+    source = SimulatedParticipant(params, reference, rng, tick=float(scene["teleop"]["dt"]))
+    result = run_trial(
+        scene,
+        spec.task,
+        spec.method,
+        source,
+        participant=pid,
+        intents=intents,
+        phase=spec.phase,
+        max_duration=max_duration,
+        sim=sim,
+        seed=seed,
+    )
+    if notes:
+        result.meta["notes"] = notes
+    return result
+
+
+def simulate_before_learning(
+    index: int,
+    scene: dict,
+    simulation: dict,
+    out_dir: Path,
+    params: ParticipantParams | None = None,
+    pid: str | None = None,
+) -> list[Path]:
+    """Phases 1-3 and the demonstrations of one participant; returns the logs' stems.
+
+    After the CASA trial of each unknown task the robot checks for misspecification
+    (:func:`misspecification_detected`, noted in the log); with
+    ``simulation["demonstrations_when"] == "detected"`` it asks for demonstrations
+    only then, with ``"always"`` (the paper's protocol) every time.
+    """
+    from casa_core.robot.sim import ArmSimulation
+
+    pid = pid or participant_id(index)
+    params = params or participant_params(index, simulation)
+    seed = int(simulation["seed"])
+    epsilon = float(simulation.get("epsilon", 1.0))
+    out_dir = Path(out_dir)
+    specs = protocol.before_learning(index)
+    written = []
+    with ArmSimulation(scene) as sim:
+        detected = {}
+        for stream, spec in enumerate(specs, start=1):
+            rng = np.random.default_rng([seed, index, stream])
+            result = _run(scene, spec, params, rng, pid, seed, simulation["max_duration"], sim)
+            if spec.method == "CASA" and spec.phase == "before_learning":
+                detected[spec.task] = misspecification_detected(result.frame, epsilon)
+                result.meta["notes"] = f"misspecification detected: {detected[spec.task]}"
+            result.write(out_dir / spec.stem)
+            written.append(out_dir / spec.stem)
+        stream = len(specs) + 1
+        for task in protocol.UNKNOWN_TASKS:
+            if simulation["demonstrations_when"] == "detected" and not detected.get(task):
+                continue
+            for spec in protocol.demonstrations(task, simulation["demonstrations"]):
+                rng = np.random.default_rng([seed, index, stream])
+                stream += 1
+                result = _run(scene, spec, params, rng, pid, seed, simulation["max_duration"], sim)
+                result.write(out_dir / spec.stem)
+                written.append(out_dir / spec.stem)
+    return written
+
+
+def learn_from_demonstrations(
+    demos_dir: Path, task: str, scene: dict, seed: int, library: Path, pid: str
+) -> dict:
+    """Learn the intent of ``task`` from the participant's demonstrations into ``library``.
+
+    Returns the row of ``learning.csv``: ``participant, task, intent,
+    endpoint_error_m, final_tilt_deg, train_seconds``; empty values when the
+    participant gave no demonstrations of the task.
+    """
+    from casa_core.irl import learning_evidence
+    from casa_core.library import learn_to_library, load_intent, read_demonstrations
+
+    name = LEARNED_NAMES[task]
+    row = {
+        "participant": pid,
+        "task": task,
+        "intent": name,
+        "endpoint_error_m": np.nan,
+        "final_tilt_deg": np.nan,
+        "train_seconds": np.nan,
+    }
+    demo_stems = [p for p in Path(demos_dir).glob(f"{task}_demonstration_*.json")]
+    if not demo_stems:
+        return row
+    path, _history, seconds = learn_to_library(
+        demos_dir, name, library, scene, seed=seed, task=task, participant=pid
+    )
+    demos, _ = read_demonstrations(demos_dir, task)
+    evidence = learning_evidence(load_intent(path).intent, demos)
+    row.update(evidence, train_seconds=seconds)
+    return row
+
+
+def simulate_after_learning(
+    index: int,
+    scene: dict,
+    simulation: dict,
+    learned: list[Path],
+    before_dir: Path,
+    out_dir: Path,
+    params: ParticipantParams | None = None,
+    pid: str | None = None,
+) -> list[Path]:
+    """Phase 4 (CASA with every learned intent), then ``surveys.csv`` for all conditions."""
+    from casa_core.robot.sim import ArmSimulation
+
+    pid = pid or participant_id(index)
+    params = params or participant_params(index, simulation)
+    seed = int(simulation["seed"])
+    out_dir = Path(out_dir)
+    written = []
+    if learned:
+        intents = trial_intents(scene, learned)
+        with ArmSimulation(scene) as sim:
+            for offset, spec in enumerate(protocol.after_learning()):
+                rng = np.random.default_rng([seed, index, 1000 + offset])
+                result = _run(
+                    scene,
+                    spec,
+                    params,
+                    rng,
+                    pid,
+                    seed,
+                    simulation["max_duration"],
+                    sim,
+                    intents=intents,
+                )
+                result.write(out_dir / spec.stem)
+                written.append(out_dir / spec.stem)
+    surveys = simulated_surveys(
+        pid, [Path(before_dir), out_dir], scene, np.random.default_rng([seed, index, LIKERT_STREAM])
+    )
+    logs.write_surveys(out_dir / logs.SURVEYS_NAME, surveys)
+    return written
+
+
+def simulated_surveys(
+    pid: str, folders: list[Path], scene: dict, rng: np.random.Generator
+) -> pd.DataFrame:
+    """Likert answers (:mod:`casa_core.study.likert`) for every condition of one participant."""
+    dt = float(scene["teleop"]["dt"])
+    trials = {}
+    for folder in folders:
+        for json_path in sorted(Path(folder).glob("*.json")):
+            meta, frame = logs.read_trial(json_path.with_suffix(""))
+            if meta["phase"] in ("familiarization", "demonstration"):
+                continue
+            measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt)
+            trials[(meta["task"], meta["method"], meta["phase"])] = (measured, frame)
+    bias = 0.5 * rng.standard_normal()
+    rows = []
+    for (task, method, phase), (measured, frame) in sorted(trials.items()):
+        reference = next(
+            (m for (t, me, _), (m, _f) in trials.items() if t == task and me == "NA"), measured
+        )
+        effort_gain = 1 - measured["effort"] / max(reference["effort"], 1)
+        error_gain = 1 - measured["error"] / reference["error"] if reference["error"] > 0 else 0.0
+        felt = likert.experience(frame)
+        latent = likert.latent_impressions(felt["help"], felt["fight"], effort_gain, error_gain)
+        for question, score in likert.answer(latent, bias, rng).items():
+            rows.append(
+                {
+                    "participant": pid,
+                    "task": task,
+                    "method": method,
+                    "phase": phase,
+                    "question": question,
+                    "score": score,
+                    "source": "simulated",
+                }
+            )
+    return pd.DataFrame(rows, columns=[*logs.SURVEY_COLUMNS, "source"])
+
+
+#: The case study's expert: short delay, little noise, no lapses or wrong keys.
+EXPERT = ParticipantParams(
+    reaction_time=0.25,
+    perception_noise=0.003,
+    deadband=0.008,
+    lapse_rate=0.0,
+    lapse_duration=0.5,
+    wrong_key=0.0,
+    max_keys=3,
+)
+
+
+def run_case_study(
+    scene: dict, case_study: dict, work_dir: Path
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The expert case study (paper, Sec. IV) and the arbitration comparison.
+
+    The expert does each task with PBA and CASA before learning, demonstrates the
+    unknown tasks 5 times, and does them again with CASA after learning. Logs and
+    the learned intents go to ``work_dir``.
+
+    Returns
+    -------
+    steps : DataFrame
+        Per tick and intent: ``participant, task, method, phase, t, alpha, intent,
+        beta, belief``.
+    arbitration : DataFrame
+        :func:`casa_core.study.arbitration_comparison.compare_arbitrations` along the
+        optimal trajectory to the red goal, known goals green and purple.
+    """
+    from casa_core.assistant import Assistant
+    from casa_core.datasets import build_tables
+    from casa_core.intents import GoalIntent
+    from casa_core.study.arbitration_comparison import compare_arbitrations
+    from casa_core.study.trial import known_goal_intents
+
+    work_dir = Path(work_dir)
+    settings = {
+        "seed": case_study["seed"],
+        "max_duration": case_study["max_duration"],
+        "demonstrations": 5,
+        "demonstrations_when": "always",
+        "epsilon": case_study.get("epsilon", 1.0),
+    }
+    before = work_dir / "logs" / "before"
+    simulate_before_learning(0, scene, settings, before, params=EXPERT, pid="expert")
+    learned = []
+    for task in protocol.UNKNOWN_TASKS:
+        learn_from_demonstrations(
+            before, task, scene, case_study["seed"], work_dir / "library", "expert"
+        )
+        learned.append(work_dir / "library" / f"{LEARNED_NAMES[task]}.intent.json")
+    after = work_dir / "logs" / "after"
+    simulate_after_learning(0, scene, settings, learned, before, after, params=EXPERT, pid="expert")
+    (after / logs.SURVEYS_NAME).unlink()  # the expert answers no survey
+    steps = build_tables(work_dir / "logs", scene, dataset="case_study").steps
+    steps = steps[steps["method"].isin(["PBA", "CASA"]) & (steps["phase"] != "demonstration")]
+    columns = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
+    steps = steps[columns].reset_index(drop=True)
+
+    start = np.array([*scene["start"]["position"], scene["start"]["rot"]], dtype=float)
+    trajectory = GoalIntent("red", scene["goals"]["red"]).optimal_trajectory(start, 15.0)
+    arbitration = compare_arbitrations(Assistant(known_goal_intents(scene)), trajectory)
+    return steps, arbitration
