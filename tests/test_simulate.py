@@ -1,0 +1,46 @@
+"""The study runner's own logic: seeding, misspecification detection, one real trial set."""
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from casa_core import logs
+from casa_core.study import simulate
+
+CONFIG = yaml.safe_load(open("config/ci.yaml"))
+SCENE = yaml.safe_load(open("config/scene.yaml"))
+
+
+def test_participant_parameters_depend_only_on_seed_and_index():
+    simulation = CONFIG["simulation"]
+    first = simulate.participant_params(4, simulation)
+    assert first == simulate.participant_params(4, {**simulation, "participants": 50})
+    assert first != simulate.participant_params(5, simulation)
+
+
+def test_misspecification_needs_every_beta_below_epsilon_at_the_end():
+    t = np.arange(0, 10, 0.5)
+    low = pd.DataFrame({"t": t, "beta:green": 0.5, "beta:purple": 0.2})
+    assert simulate.misspecification_detected(low, 1.0)
+    # green explains the last seconds: not misspecified
+    late = low.assign(**{"beta:green": np.where(t > 8, 2.0, 0.5)})
+    assert not simulate.misspecification_detected(late, 1.0)
+    # high early confidence that fell away is misspecification ("stays below" at the end)
+    early = low.assign(**{"beta:green": np.where(t < 3, 2.0, 0.5)})
+    assert simulate.misspecification_detected(early, 1.0)
+
+
+def test_before_learning_writes_valid_logs_for_the_whole_protocol(tmp_path):
+    settings = {**CONFIG["simulation"], "demonstrations": 1, "max_duration": 20.0}
+    stems = simulate.simulate_before_learning(0, SCENE, settings, tmp_path)
+    assert len(stems) == 10 + 2  # familiarization, 3 + 3 + 3 conditions, 1 demo per task
+    assert logs.validate_paths([tmp_path]) == []
+    meta, _ = logs.read_trial(tmp_path / "unknown_goal_before_learning_CASA")
+    assert meta["notes"].startswith("misspecification detected: ")
+    again = tmp_path / "again"
+    simulate.simulate_before_learning(0, SCENE, settings, again)
+    for stem in stems:  # the same seed gives the same logs, byte for byte
+        for suffix in (".csv", ".json"):
+            assert (again / stem.name).with_suffix(suffix).read_bytes() == stem.with_suffix(
+                suffix
+            ).read_bytes()
