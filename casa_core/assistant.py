@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from casa_core.arbitration import alpha_belief, alpha_confidence, alpha_distance, blend
-from casa_core.confidence import beta_hat, suboptimality
-from casa_core.inference import log_likelihood, posterior
+from casa_core.confidence import _beta_hat
+from casa_core.inference import _log_likelihood, _posterior
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
 
@@ -110,6 +110,17 @@ class Assistant:
             raise ValueError("the assistant needs at least one intent")
         if len(set(names)) != len(names):
             raise ValueError(f"intent names must be unique, got {names}")
+        for key, value in (
+            ("k", k),
+            ("pba_distance", pba_distance),
+            ("subopt_scale", subopt_scale),
+            ("horizon", horizon),
+            ("dt", dt),
+        ):
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{key} must be a positive number, got {value!r}")
+        if not (np.isfinite(lam) and lam >= 0):
+            raise ValueError(f"lam must be a number >= 0, got {lam!r}")
         self.arbitration = arbitration
         self.k = k
         self.lam = lam
@@ -146,10 +157,14 @@ class Assistant:
             self._prefix[j] += intent.step_cost(self._last_state, state)
         self._last_state = state
         to_go = np.array([i.cost_to_go(state, time_left) for i in self.intents])
-        subopt = self.subopt_scale * suboptimality(self._prefix, to_go, self._optimal)
-        betas = beta_hat(subopt, t, self.k, self.lam)
+        if not np.isfinite(to_go).all():
+            bad = [n for n, c in zip(self.names, to_go, strict=True) if not np.isfinite(c)]
+            raise ValueError(f"intent(s) {bad} returned a non-finite cost-to-go")
+        # The equations' unchecked cores: costs are finite and t, k, lam were checked once.
+        subopt = self.subopt_scale * np.maximum(self._prefix + to_go - self._optimal, 0.0)
+        betas = _beta_hat(subopt, t, self.k, self.lam)
         inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
-        belief = posterior(log_likelihood(subopt, inference_beta, t, self.k))
+        belief = _posterior(_log_likelihood(subopt, inference_beta, t, self.k))
         star = int(np.argmax(belief))
         alphas = {
             "confidence": float(alpha_confidence(betas[star])),

@@ -95,11 +95,15 @@ def beta_hat(subopt, t, k, lam=0.0):
     lam = as_finite_or_inf("lam", lam, nonnegative=True)
     if not np.isfinite(k) or k <= 0:
         raise ValueError(f"k (action dimensionality) must be a positive number, got {k!r}")
-    denominator = 2.0 * (lam + subopt)
-    evidence = t * k
-    with np.errstate(divide="ignore", invalid="ignore"):
-        beta = np.where(evidence == 0, 0.0, evidence / denominator)
+    beta = _beta_hat(subopt, t, k, lam)
     # inf / inf (infinite t with infinite suboptimality) has no meaning here.
     if np.isnan(beta).any():
         raise ValueError("beta_hat is undefined for infinite t together with infinite subopt")
     return scalar_or_array(beta)
+
+
+def _beta_hat(subopt: np.ndarray, t, k, lam) -> np.ndarray:
+    """eq. beta_map on checked input (the assistant's per-step path)."""
+    evidence = t * k
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(evidence == 0, 0.0, evidence / (2.0 * (lam + subopt)))

@@ -48,14 +48,18 @@ def log_likelihood(subopt, beta, t, k):
     t = as_finite_or_inf("t", t, nonnegative=True)
     if not np.isfinite(k) or k <= 0:
         raise ValueError(f"k (action dimensionality) must be a positive number, got {k!r}")
+    return scalar_or_array(_log_likelihood(subopt, beta, t, k))
+
+
+def _log_likelihood(subopt: np.ndarray, beta: np.ndarray, t, k) -> np.ndarray:
+    """:func:`log_likelihood` on checked input (the assistant's per-step path)."""
     half_evidence = t * k / 2.0
     with np.errstate(divide="ignore", invalid="ignore"):
         fit = np.where(subopt == 0, 0.0, -beta * subopt)
         spread = np.where(half_evidence == 0, 0.0, half_evidence * np.log(beta / (2 * np.pi)))
         total = fit + spread
     # inf - inf: beta = inf with S > 0 means the prefix is impossible under the intent.
-    total = np.where(np.isnan(total), -np.inf, total)
-    return scalar_or_array(total)
+    return np.where(np.isnan(total), -np.inf, total)
 
 
 def posterior(log_likelihoods):
@@ -82,6 +86,11 @@ def posterior(log_likelihoods):
     logs = as_finite_or_inf("log_likelihoods", log_likelihoods)
     if logs.ndim == 0 or logs.shape[-1] == 0:
         raise ValueError("log_likelihoods needs a last axis with at least one intent")
+    return _posterior(logs)
+
+
+def _posterior(logs: np.ndarray) -> np.ndarray:
+    """:func:`posterior` on checked input (the assistant's per-step path)."""
     if (logs == np.inf).any():
         certain = (logs == np.inf).astype(float)
         return certain / certain.sum(axis=-1, keepdims=True)

@@ -180,9 +180,17 @@ def format_table(results: dict) -> str:
 def untrained_neural_intent(layout: dict, seed: int = 0, planner=None):
     """A neural intent as IRL makes them (:mod:`casa_core.irl`), untrained: same cost.
 
-    ``planner`` (a :class:`casa_core.planning.PlannerConfig`) defaults to IRL's.
+    ``planner`` (a :class:`casa_core.planning.PlannerConfig`) defaults to the one
+    learned intents assist with (short warm starts), as loaded from a library.
     """
-    from casa_core.irl import IRLConfig, NeuralIntent, cost_network, feature_names, scene_objects
+    from casa_core.irl import (
+        IRLConfig,
+        NeuralIntent,
+        assist_planner,
+        cost_network,
+        feature_names,
+        scene_objects,
+    )
 
     config = IRLConfig()
     names, positions = scene_objects(layout)
@@ -194,5 +202,5 @@ def untrained_neural_intent(layout: dict, seed: int = 0, planner=None):
         positions,
         cost_scale=config.cost_scale,
         length_scale=config.length_scale,
-        planner=config.planner if planner is None else planner,
+        planner=assist_planner(config) if planner is None else planner,
     )

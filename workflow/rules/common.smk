@@ -11,11 +11,12 @@ config["allow_invalid"] = str(config["allow_invalid"]).lower() == "true"
 # The config file the package commands read (the last --configfile, else the default).
 CONFIG_FILE = workflow.overwrite_configfiles[-1] if workflow.overwrite_configfiles else "config/config.yaml"
 
-# Switched on in workflow/rules/study.smk once `casa simulate` and `casa case-study`
-# exist: the simulated study then becomes the dataset data/raw/simulated, and the
-# case study's tables and figures join the default target.
-SIMULATE = True
-CASE_STUDY = True
+config["simulate"] = str(config["simulate"]).lower() == "true"
+# The simulated study is the dataset data/raw/simulated, and the case study's tables
+# and figures join the default target (workflow/rules/study.smk); `--config
+# simulate=false` builds only the datasets already in data/raw.
+SIMULATE = config["simulate"]
+CASE_STUDY = config["simulate"]
 
 RAW = Path("data/raw")
 PROCESSED = Path("data/processed")
