@@ -70,3 +70,16 @@ def blend(alpha, user_action, robot_action):
     user = as_finite_or_inf("user_action", user_action)
     robot = as_finite_or_inf("robot_action", robot_action)
     return alpha * user + (1.0 - alpha) * robot
+
+
+# Scalar cores on checked input, for the assistant's per-step path (same formulas).
+def _alpha_confidence(beta: float) -> float:
+    return 1.0 if beta <= 1.0 else 1.0 / beta
+
+
+def _alpha_distance(distance: float, D: float) -> float:
+    return min(1.0, distance / D)
+
+
+def _alpha_belief(p_star: float, n_intents: int) -> float:
+    return min(1.0, max(0.0, 1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0)))

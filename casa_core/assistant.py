@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from casa_core.arbitration import alpha_belief, alpha_confidence, alpha_distance, blend
+from casa_core.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance, blend
 from casa_core.confidence import _beta_hat
 from casa_core.inference import _log_likelihood, _posterior
 
@@ -166,14 +166,11 @@ class Assistant:
         inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
         belief = _posterior(_log_likelihood(subopt, inference_beta, t, self.k))
         star = int(np.argmax(belief))
+        n = len(self.intents)
         alphas = {
-            "confidence": float(alpha_confidence(betas[star])),
-            "distance": float(
-                alpha_distance(self.intents[star].distance(state), self.pba_distance)
-            ),
-            "belief": float(alpha_belief(belief[star], len(self.intents)))
-            if len(self.intents) > 1
-            else 0.0,
+            "confidence": _alpha_confidence(float(betas[star])),
+            "distance": _alpha_distance(self.intents[star].distance(state), self.pba_distance),
+            "belief": _alpha_belief(float(belief[star]), n) if n > 1 else 0.0,
         }
         alpha = 1.0 if self.arbitration == "none" else alphas[self.arbitration]
         if star != self._plan_intent:

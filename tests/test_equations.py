@@ -170,3 +170,15 @@ def test_blend():
     np.testing.assert_allclose(blend(0.25, user, robot), [0.25, 0.75, 0.0, 0.375])
     with pytest.raises(ValueError, match="alpha"):
         blend(1.5, user, robot)
+
+
+def test_scalar_arbitration_cores_match_the_public_functions():
+    # the assistant's unchecked per-step path must give the same alphas
+    from casa_core.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance
+
+    for beta in (0.0, 0.3, 1.0, 2.5, np.inf):
+        assert _alpha_confidence(beta) == alpha_confidence(beta)
+    for d in (0.0, 0.2, 0.55, 3.0):
+        assert _alpha_distance(d, 0.55) == alpha_distance(d, 0.55)
+    for p in (0.0, 0.25, 1 / 3, 0.8, 1.0):
+        assert _alpha_belief(p, 3) == pytest.approx(alpha_belief(p, 3), abs=1e-15)
