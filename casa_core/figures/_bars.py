@@ -156,3 +156,20 @@ def draw_brackets(ax, brackets: Sequence[tuple[float, float, float, str]]) -> No
     top = max(y for _, _, y in placed) + step
     if top > high:
         ax.set_ylim(low, top)
+
+
+def condition_legend(fig, axes) -> None:
+    """One legend above the panels with every condition drawn, in the style's order."""
+    handles = {}
+    for ax in axes:
+        for handle, name in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(name, handle)
+    order = [c for c in style.CONDITIONS if c in handles]
+    fig.legend(
+        [handles[c] for c in order],
+        order,
+        loc="outside upper center",
+        ncols=max(1, len(order)),
+        handlelength=1.0,
+        columnspacing=1.2,
+    )

@@ -88,19 +88,7 @@ def likert_figure(likert: pd.DataFrame, title: str | None = None) -> Figure:
                 ax.set_ylabel("Likert score (1-7)")
                 ax.yaxis.set_tick_params(labelleft=True)
                 break
-        handles = {}
-        for ax in axes:
-            for handle, name in zip(*ax.get_legend_handles_labels(), strict=True):
-                handles.setdefault(name, handle)
-        order = [c for c in style.CONDITIONS if c in handles]
-        fig.legend(
-            [handles[c] for c in order],
-            order,
-            loc="outside upper center",
-            ncols=max(1, len(order)),
-            handlelength=1.0,
-            columnspacing=1.2,
-        )
+        _bars.condition_legend(fig, axes)
         caption = style.describe(title or "Likert scores", rows)
         caption += (
             " Bars: mean ± standard error over participants of the answer to: the robot"

@@ -199,19 +199,7 @@ def objective_figure(
             brackets, used_pooled = _brackets(tops, tukey_rows(stats, stat_names))
             pooled |= used_pooled
             _bars.draw_brackets(ax, brackets)
-        handles = {}
-        for ax in axes:
-            for handle, name in zip(*ax.get_legend_handles_labels(), strict=True):
-                handles.setdefault(name, handle)
-        order = [c for c in style.CONDITIONS if c in handles]
-        fig.legend(
-            [handles[c] for c in order],
-            order,
-            loc="outside upper center",
-            ncols=len(order),
-            handlelength=1.0,
-            columnspacing=1.2,
-        )
+        _bars.condition_legend(fig, axes)
         caption = style.describe(title or "Objective metrics", rows)
         caption += (
             " Bars: mean ± standard error over participants; points: participants."
