@@ -275,8 +275,8 @@ def _add_learn(commands) -> None:
     command = commands.add_parser(
         "learn",
         help="learn a new intent from demonstration logs (deep MaxEnt IRL) into a library",
-        description="Read the casa-trial/1 logs below --demos, learn intent NAME by deep "
-        "maximum-entropy IRL and write NAME.intent.json into the library folder.",
+        description="Read the demonstration logs (casa-trial/1) below --demos, learn intent "
+        "NAME by deep maximum-entropy IRL and write NAME.intent.json into the library folder.",
     )
     command.add_argument("--demos", required=True, metavar="DIR", help="folder of demo logs")
     command.add_argument("--name", required=True, help="name of the new intent")
@@ -284,6 +284,11 @@ def _add_learn(commands) -> None:
     command.add_argument("--scene", default="config/scene.yaml", metavar="YAML")
     command.add_argument("--seed", type=int, default=0, help="seed of the network (default 0)")
     command.add_argument("--task", help="only the logs of this task (default: all)")
+    command.add_argument(
+        "--phase",
+        default="demonstration",
+        help="only the logs of this phase (default: demonstration; 'any' for all)",
+    )
     command.add_argument("--participant", help="stored participant (default: from the logs)")
     command.add_argument(
         "--max-iterations", type=int, metavar="N", help="most IRL iterations (default 50)"
@@ -312,6 +317,7 @@ def _learn(args) -> int:
             task=args.task,
             participant=args.participant,
             config=config,
+            phase=None if args.phase == "any" else args.phase,
         )
     except (OSError, ValueError, logs.LogError) as error:
         print(f"casa learn: {error}", file=sys.stderr)

@@ -355,11 +355,17 @@ def scan_library(library: Path | str) -> tuple[list[LibraryEntry], list[LibraryE
     return entries, problems
 
 
-def read_demonstrations(folder: Path | str, task: str | None = None) -> tuple[list, list[dict]]:
-    """The demonstrations in ``folder`` (every casa-trial/1 log below it, sorted).
+def read_demonstrations(
+    folder: Path | str, task: str | None = None, phase: str | None = "demonstration"
+) -> tuple[list, list[dict]]:
+    """The demonstrations in ``folder`` (the casa-trial/1 logs below it, sorted).
 
     Logs are read with :func:`casa_core.logs.read_trial` (which validates them);
-    with ``task``, only that task's trials are kept.
+    with ``task``, only that task's trials are kept; with ``phase`` (by default
+    ``"demonstration"``), only the trials of that phase, so that a participant's
+    folder can be given whole: its assisted trials, where the robot pulled the
+    arm toward another intent, are not demonstrations. ``phase=None`` keeps
+    every phase.
 
     Returns
     -------
@@ -371,7 +377,7 @@ def read_demonstrations(folder: Path | str, task: str | None = None) -> tuple[li
     Raises
     ------
     ValueError
-        If the folder has no trial (of that task); :class:`casa_core.logs.LogError`
+        If the folder has no trial (of that task and phase); :class:`casa_core.logs.LogError`
         if a log breaks the contract.
     """
     from casa_core import logs
@@ -380,16 +386,23 @@ def read_demonstrations(folder: Path | str, task: str | None = None) -> tuple[li
     if not folder.is_dir():
         raise ValueError(f"{folder}: demonstrations folder not found")
     stems = [p.with_suffix("") for p in logs.find_files(folder) if p.suffix == ".json"]
-    demos, metas = [], []
+    demos, metas, skipped = [], [], set()
     for stem in stems:
         meta, frame = logs.read_trial(stem)
         if task is not None and meta["task"] != task:
+            continue
+        if phase is not None and meta["phase"] != phase:
+            skipped.add(meta["phase"])
             continue
         demos.append(frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float))
         metas.append(meta)
     if not demos:
         which = f" of task {task!r}" if task else ""
-        raise ValueError(f"{folder}: no trial log{which} found (casa-trial/1 .json + .csv pairs)")
+        which += f" in phase {phase!r}" if phase else ""
+        found = f" (found phases: {', '.join(sorted(skipped))})" if skipped else ""
+        raise ValueError(
+            f"{folder}: no trial log{which} found (casa-trial/1 .json + .csv pairs){found}"
+        )
     return demos, metas
 
 
@@ -402,11 +415,13 @@ def learn_to_library(
     task: str | None = None,
     participant: str | None = None,
     config: IRLConfig | None = None,
+    phase: str | None = "demonstration",
 ) -> tuple[Path, list[dict], float]:
     """Learn intent ``name`` from the logs in ``demos_folder`` and save it in ``library``.
 
-    ``task`` filters the logs; task and participant stored default to those of
-    the logs when they all agree (else ""). Returns the file, the training
+    ``task`` and ``phase`` filter the logs (:func:`read_demonstrations`); task
+    and participant stored default to those of the logs when they all agree
+    (else ""). Returns the file, the training
     history and the training time in seconds.
     """
     import time
@@ -415,7 +430,7 @@ def learn_to_library(
 
     config = IRLConfig() if config is None else config
     intent_path(library, name)  # a bad name fails before training
-    demos, metas = read_demonstrations(demos_folder, task)
+    demos, metas = read_demonstrations(demos_folder, task, phase)
 
     def agreed(key: str) -> str:
         values = {str(m.get(key, "")) for m in metas}

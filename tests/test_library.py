@@ -141,7 +141,7 @@ def test_bad_intent_names_are_refused_before_writing(tmp_path):
         library.intent_path(tmp_path, "../escape")
 
 
-def write_demo_logs(folder, n=2):
+def write_demo_logs(folder, n=2, phase="demonstration", stem="demo"):
     """Demonstration logs in the casa-trial/1 contract, written by the one writer."""
     rng = np.random.default_rng(7)
     for i in range(n):
@@ -155,10 +155,10 @@ def write_demo_logs(folder, n=2):
             "participant": "p07",
             "task": "unknown_goal",
             "method": "NA",
-            "phase": "demonstration",
+            "phase": phase,
             "source": "simulated",
         }
-        write_trial(folder / f"demo{i}", meta, frame)
+        write_trial(folder / f"{stem}{i}", meta, frame)
 
 
 def run_casa(*args):
@@ -191,6 +191,23 @@ def test_cli_learn_reports_missing_demos_without_traceback(tmp_path):
     )
     assert done.returncode == 1
     assert "none" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_only_demonstrations_are_read_from_a_participant_folder(tmp_path):
+    # A participant's folder also holds assisted trials of the same task, where
+    # the robot pulled the arm toward another intent: they are not demonstrations.
+    write_demo_logs(tmp_path, n=2)
+    write_demo_logs(tmp_path, n=3, phase="before_learning", stem="assisted")
+    demos, metas = library.read_demonstrations(tmp_path, "unknown_goal")
+    assert len(demos) == 2 and {m["phase"] for m in metas} == {"demonstration"}
+    assert len(library.read_demonstrations(tmp_path, "unknown_goal", phase=None)[0]) == 5
+
+
+def test_cli_learn_names_the_phases_it_found_when_none_is_a_demonstration(tmp_path):
+    write_demo_logs(tmp_path, n=1, phase="before_learning")
+    done = run_casa("learn", "--demos", str(tmp_path), "--name", "x", "--library", str(tmp_path))
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert "in phase 'demonstration'" in done.stderr and "before_learning" in done.stderr
 
 
 def test_weights_survive_exactly(tmp_path):
