@@ -214,9 +214,16 @@ def cost_network(n_inputs: int, hidden: int, negative_slope: float, seed: int):
 class NeuralIntent(PlannedIntent):
     """An intent whose per-state cost is a learned network (deep MaxEnt IRL).
 
-    ``state_cost(s) = cost_scale * sigmoid(network(state_features(s)))``; the
-    prefix cost, optimal cost-to-go, optimal trajectory and distance come from
-    it and the planner (:class:`casa_core.planning.PlannedIntent`).
+    ``state_cost(s) = cost_scale * sigmoid(network(state_features(s))) - cost_offset``;
+    the prefix cost, optimal cost-to-go, optimal trajectory and distance come
+    from it and the planner (:class:`casa_core.planning.PlannedIntent`).
+
+    ``cost_offset`` is the learned cost where the demonstrations come to rest,
+    so that, as for a goal intent at its goal, resting where the task is done
+    costs nothing. Learning cannot see a constant per-state offset (every
+    trajectory of IRL has the same number of states), but inference can: a
+    trial goes on past the horizon, and a cost that is not zero at rest would
+    make a person who has finished look ever more suboptimal.
 
     Parameters
     ----------
@@ -231,6 +238,8 @@ class NeuralIntent(PlannedIntent):
         that scene).
     cost_scale, length_scale : float
         See :class:`IRLConfig`.
+    cost_offset : float, optional
+        Subtracted from every per-state cost (set by :func:`learn_intent`).
     planner : PlannerConfig, optional
         Horizon, dt, speed limits and optimizer settings.
     guides : sequence of array_like, optional
@@ -248,6 +257,7 @@ class NeuralIntent(PlannedIntent):
         length_scale: float,
         planner: PlannerConfig | None = None,
         guides=(),
+        cost_offset: float = 0.0,
     ):
         super().__init__(name, planner, guides=guides)
         self.network = network
@@ -260,6 +270,9 @@ class NeuralIntent(PlannedIntent):
             )
         self.cost_scale = float(cost_scale)
         self.length_scale = float(length_scale)
+        self.cost_offset = float(cost_offset)
+        if not np.isfinite(self.cost_offset):
+            raise ValueError(f"intent {name!r}: cost_offset must be finite, got {cost_offset!r}")
         self._objects_t = torch.as_tensor(self.objects, dtype=torch.float64)
         for parameter in self.network.parameters():
             parameter.requires_grad_(False)
@@ -274,7 +287,8 @@ class NeuralIntent(PlannedIntent):
 
     def state_cost(self, states: torch.Tensor) -> torch.Tensor:
         inputs = state_features(states, self._objects_t, self.length_scale)
-        return self.cost_scale * torch.sigmoid(self.network(inputs)[..., 0].double())
+        raw = self.cost_scale * torch.sigmoid(self.network(inputs)[..., 0].double())
+        return raw - self.cost_offset
 
 
 def demo_waypoints(demo, dt: float, n_steps: int) -> np.ndarray:
@@ -339,6 +353,10 @@ def learn_intent(
 
     Notes
     -----
+    The intent's ``cost_offset`` is the lowest per-state cost among the states
+    of that iteration's D^phi and of the demonstrations: where the person comes
+    to rest, resting is free (see :class:`NeuralIntent`).
+
     The weights returned are those under which D^phi was planned in the
     iteration whose D^phi ended closest to the demonstrations (metres plus 0.1 m
     per radian of rot): the last cost whose optimum was checked by planning,
@@ -441,16 +459,19 @@ def learn_intent(
             )
             match = _match(history[-1])
             if best is None or match < best[0]:
-                best = (match, iteration, planned_under)
+                best = (match, iteration, planned_under, plan.states)
             converged = _converged(history[-1], config)
             if iteration >= config.min_iterations and converged:
                 break
         history[-1]["converged"] = converged
         # Return the cost whose optimal trajectories matched the demonstrations best
         # (verified by planning), not the one after the last, unverified Adam steps.
-        _, kept, weights = best
+        _, kept, weights, kept_plan = best
         network.load_state_dict(weights)
         history[kept - 1]["kept"] = True
+        with torch.no_grad():  # the cost at rest: the cheapest state planned or demonstrated
+            seen = torch.cat([torch.from_numpy(kept_plan[:, 1:, :]), demo_states], dim=1)
+            offset = float(per_state(seen).min())
     finally:
         torch.set_num_threads(threads)
     intent = NeuralIntent(
@@ -462,6 +483,7 @@ def learn_intent(
         config.length_scale,
         assist_planner(config),
         guides=[waypoints.mean(axis=0)],
+        cost_offset=offset,
     )
     return intent, history
 

@@ -36,7 +36,7 @@ from casa_core.irl import IRLConfig, NeuralIntent, cost_network, feature_names
 from casa_core.planning import PlannerConfig
 
 FORMAT = "casa-intent"
-VERSION = 1
+VERSION = 2  # 2: cost_offset
 SUFFIX = ".intent.json"
 REQUIRED_KEYS = (
     "format",
@@ -49,6 +49,7 @@ REQUIRED_KEYS = (
     "objects",
     "network",
     "cost_scale",
+    "cost_offset",
     "length_scale",
     "planner",
     "guides",
@@ -189,6 +190,7 @@ def save_intent(
             "negative_slope": config.negative_slope,
         },
         "cost_scale": intent.cost_scale,
+        "cost_offset": intent.cost_offset,
         "length_scale": intent.length_scale,
         "planner": asdict(intent.planner),
         "guides": [g.tolist() for g in intent.guides],
@@ -325,6 +327,7 @@ def _build_intent(payload: dict) -> NeuralIntent:
         payload["length_scale"],
         PlannerConfig(**payload["planner"]),
         guides=[np.asarray(g, dtype=float) for g in payload["guides"]],
+        cost_offset=payload["cost_offset"],
     )
 
 

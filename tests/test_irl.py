@@ -162,14 +162,29 @@ def test_features_are_documented_and_computed():
     assert features[red] == pytest.approx(expected, rel=1e-4)  # float32 inputs
 
 
+def test_resting_where_the_demonstrations_end_is_free(learned):
+    # As at a goal intent's goal, waiting where the task is done adds no cost, so a
+    # trial that goes on past the horizon does not make the person look suboptimal.
+    demos, intent, _ = learned
+    rest = intent.optimal_trajectory(START, 15.0)[-1]
+    assert intent.cost_offset > 0  # the network's floor sits above zero ...
+    assert abs(intent.costs_of(rest)[0]) < 0.01 * intent.cost_scale  # ... and is removed
+    # The offset is the cheapest demonstrated or planned state: no demonstrated state
+    # is cheaper than rest.
+    ends = np.array([d[-1, 1:5] for d in demos])
+    assert (intent.costs_of(ends) >= -1e-9).all()
+
+
 def test_cost_is_bounded():
     names, objects = scene_objects(SCENE)
     network = cost_network(len(feature_names(names)), 128, 0.01, seed=0)
     with torch.no_grad():
         network[-1].bias.fill_(1e3)  # drive the output far into saturation
-    intent = NeuralIntent("n", network, names, objects, cost_scale=10.0, length_scale=0.1)
+    intent = NeuralIntent(
+        "n", network, names, objects, cost_scale=10.0, length_scale=0.1, cost_offset=2.0
+    )
     costs = intent.costs_of(np.array([START, [0.1, 0.2, 0.3, 1.0]]))
-    assert ((costs >= 0) & (costs <= 10.0)).all()
+    assert ((costs >= -2.0) & (costs <= 8.0)).all()
 
 
 def test_learning_evidence_of_the_pouring_intent():

@@ -28,7 +28,14 @@ def make_intent(name="red_p01", seed=0):
     network = cost_network(len(feature_names(names)), config.hidden, config.negative_slope, seed)
     guide = np.linspace([0.45, -0.22, 0.38, 0.0], [0.40, 0.22, 0.12, 0.0], 31)
     return NeuralIntent(
-        name, network, names, objects, config.cost_scale, config.length_scale, guides=[guide]
+        name,
+        network,
+        names,
+        objects,
+        config.cost_scale,
+        config.length_scale,
+        guides=[guide],
+        cost_offset=1.25,
     )
 
 
@@ -46,6 +53,7 @@ def test_round_trip_keeps_the_cost_and_the_metadata(tmp_path):
     entry = library.load_intent(path)
     states = np.random.default_rng(0).uniform([0.2, -0.4, 0.1, -1], [0.7, 0.3, 0.5, 2], (50, 4))
     np.testing.assert_array_equal(entry.intent.costs_of(states), intent.costs_of(states))
+    assert entry.intent.cost_offset == 1.25
     meta = entry.metadata
     assert (meta["name"], meta["task"], meta["participant"], meta["seed"]) == (
         "red_p01",
@@ -56,7 +64,7 @@ def test_round_trip_keeps_the_cost_and_the_metadata(tmp_path):
     assert meta["features"] == intent.features
     assert meta["demo_hashes"] == [library.demo_hash(DEMOS[0])]
     assert meta["history"] == HISTORY
-    assert meta["format"] == "casa-intent" and meta["version"] == 1
+    assert meta["format"] == "casa-intent" and meta["version"] == library.VERSION
     np.testing.assert_array_equal(entry.intent.guides[0], intent.guides[0])
     assert not list(tmp_path.glob(".*tmp"))  # the atomic write left no temporary file
 
@@ -91,7 +99,7 @@ def damage(path, how):
         path.write_text(json.dumps(payload))
     elif how == "version":
         payload = json.loads(text)
-        payload["version"] = 2
+        payload["version"] = library.VERSION + 1
         path.write_text(json.dumps(payload))
     elif how == "missing":
         payload = json.loads(text)
