@@ -22,6 +22,7 @@ from casa_core.confidence import _beta_hat
 from casa_core.inference import _log_likelihood, _posterior
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
+EVIDENCE = ("executed", "commanded")
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,22 @@ class Assistant:
         Seconds between inference steps and trajectory states (0.5).
     speed, rot_speed : float
         Limits of the robot action u*: m/s for the position, rad/s for rot.
+    evidence : {"commanded", "executed"}
+        What the trajectory xi_{0->t} of inference is. The paper's model is one
+        of the *user's* input (beta says how consistent with the intent that
+        input is expected to be). ``"executed"`` (the original
+        implementation's): the states the arm went through, the robot's own
+        motion included, so that once the robot assists an intent its motion
+        confirms that intent. ``"commanded"`` (default): what the user's input
+        alone did, i.e. each inference step the state the arm would have
+        reached from the last one without the robot's share (1 - alpha)(u* -
+        T(a)) of the blended action; the suboptimality is then summed step by
+        step, ``c(x_j -> x^H_{j+1}) + C*(x^H_{j+1}) - C*(x_{j+1})`` added to
+        the prefix cost, so that the robot's own motion is never evidence for
+        the intent it assists. Both are the same while alpha = 1.
+    tick : float
+        Seconds each :meth:`act` is applied for (the 20 Hz control tick); with
+        ``evidence="commanded"`` it turns the robot's share into displacement.
     """
 
     def __init__(
@@ -101,9 +118,13 @@ class Assistant:
         dt: float = 0.5,
         speed: float = 0.05,
         rot_speed: float = 0.5,
+        evidence: str = "commanded",
+        tick: float = 0.05,
     ):
         if arbitration not in ARBITRATIONS:
             raise ValueError(f"arbitration must be one of {ARBITRATIONS}, got {arbitration!r}")
+        if evidence not in EVIDENCE:
+            raise ValueError(f"evidence must be one of {EVIDENCE}, got {evidence!r}")
         self.intents = list(intents)
         names = [intent.name for intent in self.intents]
         if not names:
@@ -116,6 +137,7 @@ class Assistant:
             ("subopt_scale", subopt_scale),
             ("horizon", horizon),
             ("dt", dt),
+            ("tick", tick),
         ):
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{key} must be a positive number, got {value!r}")
@@ -131,6 +153,8 @@ class Assistant:
         self.dt = dt
         self.speed = speed
         self.rot_speed = rot_speed
+        self.evidence = evidence
+        self.tick = tick
         self.names = names
 
     def reset(self, state) -> None:
@@ -143,6 +167,7 @@ class Assistant:
         self._plan = None  # cached optimal trajectory to theta*, one state per step
         self._plan_intent = None
         self._plan_origin = 0  # inference step at which the plan starts
+        self._robot_motion = np.zeros_like(state)  # robot's share since the last step
         self.latest = None
 
     def update(self, state) -> Inference:
@@ -153,13 +178,17 @@ class Assistant:
         self._steps += 1
         t = self._steps
         time_left = max(self.horizon - t * self.dt, 0.0)
+        observed = state
+        if self.evidence == "commanded" and self._robot_motion.any():
+            observed = state - self._robot_motion
         for j, intent in enumerate(self.intents):
-            self._prefix[j] += intent.step_cost(self._last_state, state)
+            self._prefix[j] += intent.step_cost(self._last_state, observed)
         self._last_state = state
-        to_go = np.array([i.cost_to_go(state, time_left) for i in self.intents])
-        if not np.isfinite(to_go).all():
-            bad = [n for n, c in zip(self.names, to_go, strict=True) if not np.isfinite(c)]
-            raise ValueError(f"intent(s) {bad} returned a non-finite cost-to-go")
+        self._robot_motion = np.zeros_like(state)
+        to_go = self._costs_to_go(state, time_left)
+        if observed is not state:
+            # The user's step ended at `observed`; the next one starts from `state`.
+            self._prefix += self._costs_to_go(observed, time_left) - to_go
         # The equations' unchecked cores: costs are finite and t, k, lam were checked once.
         subopt = self.subopt_scale * np.maximum(self._prefix + to_go - self._optimal, 0.0)
         betas = _beta_hat(subopt, t, self.k, self.lam)
@@ -189,6 +218,13 @@ class Assistant:
         )
         return self.latest
 
+    def _costs_to_go(self, state, time_left: float) -> np.ndarray:
+        to_go = np.array([i.cost_to_go(state, time_left) for i in self.intents])
+        if not np.isfinite(to_go).all():
+            bad = [n for n, c in zip(self.names, to_go, strict=True) if not np.isfinite(c)]
+            raise ValueError(f"intent(s) {bad} returned a non-finite cost-to-go")
+        return to_go
+
     def robot_action(self, state, elapsed_in_step: float = 0.0) -> np.ndarray:
         """u*: velocity toward the cached plan's next state, within the speed limits."""
         state = np.asarray(state, dtype=float)
@@ -213,4 +249,7 @@ class Assistant:
         if self.latest is None:
             return user_action.copy()
         robot = self.robot_action(state, elapsed_in_step)
-        return blend(self.latest.alpha, user_action, robot)
+        alpha = self.latest.alpha
+        if self.evidence == "commanded" and alpha < 1.0:
+            self._robot_motion += (1.0 - alpha) * (robot - user_action) * self.tick
+        return blend(alpha, user_action, robot)

@@ -19,6 +19,10 @@ Departures from the original, each a setting of :class:`IRLConfig`:
   end*; the learned intent must itself say where to go (inference asks it for
   optimal trajectories from arbitrary states, and ``endpoint_error_m`` of issue
   5 measures where they end).
+- The learned cost is calibrated against the goal intents (``calibration``):
+  IRL fixes a cost only up to scale, and 5 demonstrations leave the network's
+  scale arbitrary (its optimal cost from the start spans two orders of
+  magnitude between participants), while inference compares intents' costs.
 - lr 3e-3 with 3 Adam steps per plan of D^phi (original: lr 1e-3, one step),
   a small penalty on the network's output before the sigmoid (the loss alone
   drives the sigmoid into saturation, where learning stops), and a short cold
@@ -59,6 +63,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 import torch
 
+from casa_core.intents import COST_FORMS, GoalIntent
 from casa_core.planning import Plan, PlannedIntent, PlannerConfig, optimize, steps_left
 from casa_core.skills import cup_tilt_deg, end_effector_rotation
 
@@ -83,10 +88,18 @@ class IRLConfig:
     negative_slope : float
         Slope of the leaky ReLU for negative inputs.
     cost_scale : float
-        The per-state cost is ``cost_scale * sigmoid(network output)``, in
-        [0, cost_scale]. Default 56.75 = 227 * 0.5 s * 0.5 m: what a goal
-        intent's ``distance_sum`` cost charges per state at 0.5 m from its goal,
-        so that learned and goal intents compare on one scale.
+        During training the per-state cost is ``cost_scale * sigmoid(network
+        output)``, in [0, cost_scale]. Default 56.75 = 227 * 0.5 s * 0.5 m: what
+        a goal intent's ``distance_sum`` cost charges per state at 0.5 m from
+        its goal (the scale at which training was tuned).
+    calibration : {"path_length", "distance_sum"} or None
+        After training, the cost is multiplied by the factor that makes its
+        optimal cost from the demonstrations' mean start equal to that of a
+        :class:`~casa_core.intents.GoalIntent` of this cost form whose goal is
+        where that optimal trajectory ends: learned and goal intents then charge
+        the same for the same task done optimally, so their suboptimalities,
+        confidences and beliefs compare. Default ``"path_length"``, the goal
+        intents' default; None keeps the trained scale.
     length_scale : float
         Metres per unit of the position features.
     lr, weight_decay : float
@@ -133,6 +146,7 @@ class IRLConfig:
     hidden: int = 128
     negative_slope: float = 0.01
     cost_scale: float = 227.0 * 0.5 * 0.5
+    calibration: str | None = "path_length"
     length_scale: float = 0.1
     lr: float = 3e-3
     weight_decay: float = 1e-3
@@ -146,6 +160,42 @@ class IRLConfig:
     tol_end: float = 0.005
     tol_match: float = 0.03
     planner: PlannerConfig = PlannerConfig()
+
+    def __post_init__(self):
+        if self.calibration is not None and self.calibration not in COST_FORMS:
+            raise ValueError(
+                f"IRLConfig.calibration must be one of {COST_FORMS} or None, "
+                f"got {self.calibration!r}"
+            )
+
+
+def calibrate(intent: NeuralIntent, start, cost: str) -> tuple[NeuralIntent, float]:
+    """The intent with its cost scaled to match a goal intent's (see ``IRLConfig.calibration``).
+
+    Returns the calibrated intent (a new one: plans are not shared) and the
+    factor applied. Where the learned optimum from ``start`` costs nothing (the
+    person stays where they are), there is nothing to match and the factor is 1.
+    """
+    if cost not in COST_FORMS:
+        raise ValueError(f"calibration must be one of {COST_FORMS} or None, got {cost!r}")
+    planner = intent.planner
+    plan = intent.plan(start, planner.horizon)
+    learned = float(plan.costs[0])
+    goal = GoalIntent("reference", plan.states[0, -1, :3], cost=cost, dt=planner.dt)
+    reference = goal.cost_to_go(start, planner.horizon)
+    factor = reference / learned if learned > 1e-9 and reference > 1e-9 else 1.0
+    calibrated = NeuralIntent(
+        intent.name,
+        intent.network,
+        intent.object_names,
+        intent.objects,
+        intent.cost_scale * factor,
+        intent.length_scale,
+        planner,
+        guides=intent.guides,
+        cost_offset=intent.cost_offset * factor,
+    )
+    return calibrated, factor
 
 
 def assist_planner(config: IRLConfig) -> PlannerConfig:
@@ -349,7 +399,8 @@ def learn_intent(
         absolute difference of their rot, rad), ``end_moved_m`` (how far
         the ends of D^phi moved since the last iteration; None on the first),
         ``planner_iterations``, ``seconds``; on the last, ``converged``; on the
-        iteration whose weights are returned, ``kept`` (True).
+        iteration whose weights are returned, ``kept`` (True) and, if the cost
+        was calibrated, ``calibration`` (the factor applied).
 
     Notes
     -----
@@ -485,6 +536,9 @@ def learn_intent(
         guides=[waypoints.mean(axis=0)],
         cost_offset=offset,
     )
+    if config.calibration is not None:
+        intent, factor = calibrate(intent, waypoints[:, 0, :].mean(axis=0), config.calibration)
+        history[kept - 1]["calibration"] = factor
     return intent, history
 
 

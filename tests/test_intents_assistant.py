@@ -152,3 +152,55 @@ def test_assistant_guards():
     assistant = make_assistant()
     with pytest.raises(ValueError, match="finite"):
         assistant.update([0.0, np.nan, 0.0, 0.0])
+
+
+def drive(evidence, arbitration="confidence", switch_after=4, steps=24, tick=0.05):
+    """Closed loop: the user heads for green, then from step `switch_after` on for purple.
+
+    Each control tick the user commands full speed toward their goal, the assistant
+    blends, and the arm moves by the blended action: the robot's share is real motion.
+    """
+    assistant = make_assistant(arbitration, evidence=evidence, tick=tick)
+    purple = assistant.intents[1].goal
+    state, inferences = START.copy(), []
+    for k in range(steps):
+        goal = GOAL if k < switch_after else purple
+        for i in range(10):  # 0.5 s of 0.05 s ticks
+            heading = goal - state[:3]
+            distance = np.linalg.norm(heading)
+            user = np.zeros(4)
+            if distance > 1e-9:
+                user[:3] = heading / distance * min(0.05, distance / tick)
+            state = state + assistant.act(state, user, elapsed_in_step=i * tick) * tick
+        inferences.append(assistant.update(state))
+    return inferences
+
+
+@pytest.mark.parametrize("arbitration", ["none", "confidence"])
+def test_commanded_evidence_equals_executed_while_the_user_has_full_control(arbitration):
+    # With alpha = 1 the arm goes exactly where the user commands, so both evidences
+    # are the same trajectory. Under CASA that holds until the robot first assists.
+    steps = 24 if arbitration == "none" else 2
+    executed = drive("executed", arbitration, switch_after=0, steps=steps)
+    commanded = drive("commanded", arbitration, switch_after=0, steps=steps)
+    assert all(i.alpha == 1.0 for i in executed[:-1])
+    assert [i.suboptimality for i in commanded] == [i.suboptimality for i in executed]
+
+
+def test_the_robots_own_motion_is_not_evidence_under_commanded():
+    # Green first, then purple. With the executed trajectory as evidence, the robot,
+    # confident in green, pulls the arm there and that motion keeps confirming green
+    # (the lock-in). With the user's commands as evidence, every step toward purple
+    # is optimal for purple (path length: a step of length s at the goal lowers the
+    # cost-to-go by 227 s), so purple's suboptimality stops growing and purple wins.
+    executed = drive("executed")
+    commanded = drive("commanded")
+    assert executed[3].alpha < 1.0  # the robot assists green before the switch
+    assert executed[-1].intent == "green" and executed[-1].alpha < 0.5
+    assert commanded[-1].intent == "purple"
+    # Constant up to the bend of the user's path within a step (the user steers from
+    # the arm's actual, robot-moved position): 1e-3 of a cost that is 18 here.
+    after_switch = [i.suboptimality["purple"] for i in commanded[5:16]]
+    np.testing.assert_allclose(after_switch, after_switch[0], atol=1e-3)
+    grown = executed[15].suboptimality["purple"] - executed[5].suboptimality["purple"]
+    assert grown > 1.0

@@ -162,6 +162,24 @@ def test_features_are_documented_and_computed():
     assert features[red] == pytest.approx(expected, rel=1e-4)  # float32 inputs
 
 
+def test_learned_cost_is_calibrated_against_a_goal_intent(learned):
+    # IRLConfig.calibration = "path_length": the optimal trajectory from the start
+    # costs what a path-length goal intent at its end charges, the closed form
+    # 227 per metre * distance (the goal is reachable within T = 15 s at 0.05 m/s).
+    demos, intent, history = learned
+    start = np.mean([d[0, 1:5] for d in demos], axis=0)
+    end = intent.optimal_trajectory(start, 15.0)[-1, :3]
+    expected = 227.0 * np.linalg.norm(end - start[:3])
+    # 1e-3: the plan is redone under the scaled cost, and the float32 network's
+    # gradients round differently at another scale (observed 2e-4).
+    assert intent.cost_to_go(start, 15.0) == pytest.approx(expected, rel=1e-3)
+    kept = [h for h in history if h.get("kept")]
+    assert len(kept) == 1
+    assert intent.cost_scale == pytest.approx(IRLConfig().cost_scale * kept[0]["calibration"])
+    with pytest.raises(ValueError, match="calibration must be one of"):
+        IRLConfig(calibration="path")
+
+
 def test_resting_where_the_demonstrations_end_is_free(learned):
     # As at a goal intent's goal, waiting where the task is done adds no cost, so a
     # trial that goes on past the horizon does not make the person look suboptimal.

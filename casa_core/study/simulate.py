@@ -51,7 +51,12 @@ def misspecification_detected(frame: pd.DataFrame, epsilon: float) -> bool:
     return bool((betas[recent] < epsilon).all().all())
 
 
-def _run(scene, spec, params, rng, pid, seed, max_duration, sim, intents=None, notes=None):
+def assistant_options(settings: dict) -> dict:
+    """Settings of the study's :class:`~casa_core.assistant.Assistant` found in the config."""
+    return {key: settings[key] for key in ("evidence",) if key in settings}
+
+
+def _run(scene, spec, settings, params, rng, pid, sim, intents=None):
     reference = intended_trajectory(spec.task, scene)
     source = SimulatedParticipant(params, reference, rng, tick=float(scene["teleop"]["dt"]))
     result = run_trial(
@@ -62,12 +67,11 @@ def _run(scene, spec, params, rng, pid, seed, max_duration, sim, intents=None, n
         participant=pid,
         intents=intents,
         phase=spec.phase,
-        max_duration=max_duration,
+        max_duration=settings["max_duration"],
         sim=sim,
-        seed=seed,
+        assistant_options=assistant_options(settings),
+        seed=int(settings["seed"]),
     )
-    if notes:
-        result.meta["notes"] = notes
     return result
 
 
@@ -99,7 +103,7 @@ def simulate_before_learning(
         detected = {}
         for stream, spec in enumerate(specs, start=1):
             rng = np.random.default_rng([seed, index, stream])
-            result = _run(scene, spec, params, rng, pid, seed, simulation["max_duration"], sim)
+            result = _run(scene, spec, simulation, params, rng, pid, sim)
             if spec.method == "CASA" and spec.phase == "before_learning":
                 detected[spec.task] = misspecification_detected(result.frame, epsilon)
                 result.meta["notes"] = f"misspecification detected: {detected[spec.task]}"
@@ -112,7 +116,7 @@ def simulate_before_learning(
             for spec in protocol.demonstrations(task, simulation["demonstrations"]):
                 rng = np.random.default_rng([seed, index, stream])
                 stream += 1
-                result = _run(scene, spec, params, rng, pid, seed, simulation["max_duration"], sim)
+                result = _run(scene, spec, simulation, params, rng, pid, sim)
                 result.write(out_dir / spec.stem)
                 written.append(out_dir / spec.stem)
     return written
@@ -174,17 +178,7 @@ def simulate_after_learning(
         with ArmSimulation(scene) as sim:
             for offset, spec in enumerate(protocol.after_learning()):
                 rng = np.random.default_rng([seed, index, 1000 + offset])
-                result = _run(
-                    scene,
-                    spec,
-                    params,
-                    rng,
-                    pid,
-                    seed,
-                    simulation["max_duration"],
-                    sim,
-                    intents=intents,
-                )
+                result = _run(scene, spec, simulation, params, rng, pid, sim, intents=intents)
                 result.write(out_dir / spec.stem)
                 written.append(out_dir / spec.stem)
     surveys = simulated_surveys(
@@ -275,6 +269,7 @@ def run_case_study(
         "demonstrations": 5,
         "demonstrations_when": "always",
         "epsilon": case_study.get("epsilon", 1.0),
+        **assistant_options(case_study),
     }
     before = work_dir / "logs" / "before"
     simulate_before_learning(0, scene, settings, before, params=EXPERT, pid="expert")

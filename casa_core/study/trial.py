@@ -245,6 +245,7 @@ def run_trial(
         dt=INFERENCE_PERIOD,
         speed=teleop["speed"],
         rot_speed=teleop["rot_speed"],
+        tick=dt,
         **(assistant_options or {}),
     )
     own_sim = sim is None
