@@ -185,10 +185,13 @@ class Assistant:
             self._prefix[j] += intent.step_cost(self._last_state, observed)
         self._last_state = state
         self._robot_motion = np.zeros_like(state)
-        to_go = self._costs_to_go(state, time_left)
-        if observed is not state:
-            # The user's step ended at `observed`; the next one starts from `state`.
-            self._prefix += self._costs_to_go(observed, time_left) - to_go
+        if observed is state:
+            to_go = self._costs_to_go([state], time_left)[:, 0]
+        else:
+            # The user's step ended at `observed`; the next one starts from `state`
+            # (last, so that the planners warm start from its plan next time).
+            at_observed, to_go = self._costs_to_go([observed, state], time_left).T
+            self._prefix += at_observed - to_go
         # The equations' unchecked cores: costs are finite and t, k, lam were checked once.
         subopt = self.subopt_scale * np.maximum(self._prefix + to_go - self._optimal, 0.0)
         betas = _beta_hat(subopt, t, self.k, self.lam)
@@ -218,10 +221,14 @@ class Assistant:
         )
         return self.latest
 
-    def _costs_to_go(self, state, time_left: float) -> np.ndarray:
-        to_go = np.array([i.cost_to_go(state, time_left) for i in self.intents])
+    def _costs_to_go(self, states, time_left: float) -> np.ndarray:
+        """Costs-to-go ``(n_intents, n_states)``; each intent plans its states at once."""
+        if len(states) == 1:  # the common case, without the batching machinery
+            to_go = np.array([[i.cost_to_go(states[0], time_left)] for i in self.intents])
+        else:
+            to_go = np.array([i.costs_to_go(states, time_left) for i in self.intents])
         if not np.isfinite(to_go).all():
-            bad = [n for n, c in zip(self.names, to_go, strict=True) if not np.isfinite(c)]
+            bad = [n for n, c in zip(self.names, to_go, strict=True) if not np.isfinite(c).all()]
             raise ValueError(f"intent(s) {bad} returned a non-finite cost-to-go")
         return to_go
 

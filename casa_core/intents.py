@@ -42,6 +42,10 @@ class Intent(ABC):
     def cost_to_go(self, state: np.ndarray, time_left: float) -> float:
         """C(xi*_{t->T}): the optimal cost from ``state`` with ``time_left`` seconds left."""
 
+    def costs_to_go(self, states, time_left: float) -> np.ndarray:
+        """:meth:`cost_to_go` of several states with the same time left (planners batch them)."""
+        return np.array([self.cost_to_go(state, time_left) for state in states])
+
     @abstractmethod
     def optimal_trajectory(self, state: np.ndarray, time_left: float) -> np.ndarray:
         """xi*_{t->T}: states ``(n, 4)`` every ``dt`` from ``state`` (included) to the horizon."""

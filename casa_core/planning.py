@@ -386,15 +386,44 @@ class PlannedIntent(Intent):
             )
         else:
             result = optimize(self.state_cost, state[None], n, self.planner)
-        self._cache[key] = result
-        if len(self._cache) > self._cache_size:
-            self._cache.popitem(last=False)
+        self._remember(key, result)
         if n > 0:
             self._latest = (n, result.states[0])
         return result
 
+    def _remember(self, key: tuple, plan: Plan) -> None:
+        self._cache[key] = plan
+        if len(self._cache) > self._cache_size:
+            self._cache.popitem(last=False)
+
     def cost_to_go(self, state, time_left: float) -> float:
         return float(self.plan(state, time_left).costs[0])
+
+    def costs_to_go(self, states, time_left: float) -> np.ndarray:
+        """Costs-to-go of several states, the plans not yet cached optimized in one batch.
+
+        Each is warm started from the latest plan (one network evaluation per
+        iteration serves them all); the last state's plan is the one later plans
+        warm start from.
+        """
+        states = [np.asarray(state, dtype=float).reshape(4) for state in states]
+        n = steps_left(time_left, self.dt)
+        keys = [(state.tobytes(), n) for state in states]
+        missing = [i for i, key in enumerate(keys) if key not in self._cache]
+        if len(missing) > 1 and self._latest is not None and 0 < n <= self._latest[0]:
+            previous_n, previous_states = self._latest
+            warm = warm_start_from(previous_states[None], previous_n - n, n)
+            batch = optimize(
+                self.state_cost,
+                np.stack([states[i] for i in missing]),
+                n,
+                self.planner,
+                warm_start=np.repeat(warm, len(missing), axis=0),
+            )
+            for row, i in enumerate(missing):
+                one = slice(row, row + 1)
+                self._remember(keys[i], Plan(batch.states[one], batch.costs[one], batch.iterations))
+        return np.array([self.plan(state, time_left).costs[0] for state in states])
 
     def optimal_trajectory(self, state, time_left: float) -> np.ndarray:
         return self.plan(state, time_left).states[0].copy()

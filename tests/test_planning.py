@@ -156,3 +156,18 @@ def test_feasible_leaves_feasible_states_alone_and_clips_the_rest():
     np.testing.assert_array_equal(feasible(starts, far, "axis"), [[[1.0, 0.0, 0.0, 0.0]]])
     diagonal = np.array([[[3.0, 4.0, 0.0, 0.0]]])
     np.testing.assert_allclose(feasible(starts, diagonal, "norm"), [[[0.6, 0.8, 0.0, 0.0]]])
+
+
+def test_costs_to_go_of_several_states_match_one_by_one_plans():
+    # The assistant asks for the cost-to-go at the arm's state and at the state the
+    # user's input alone reached; a planner batches both, warm started alike.
+    batched, single = GoalCost(RED), GoalCost(RED)
+    for intent in (batched, single):
+        intent.cost_to_go(START, 15.0)  # the plan later plans warm start from
+    a = START + np.array([0.02, 0.01, -0.02, 0.0])
+    b = START + np.array([-0.01, 0.025, 0.0, 0.0])
+    costs = batched.costs_to_go([a, b], 14.5)
+    expected = [single.cost_to_go(a, 14.5), single.cost_to_go(b, 14.5)]
+    np.testing.assert_allclose(costs, expected, rtol=1e-3)
+    assert len(batched._cache) == 3  # both new plans kept: the next ask is free
+    np.testing.assert_array_equal(batched.costs_to_go([a, b], 14.5), costs)

@@ -88,6 +88,8 @@ def time_assistance_step(
     fed.reset(states[0])
     for state in states[1:late_step]:
         fed.update(state)
+        # The robot's share of the motion, which the next step removes from the evidence.
+        fed.act(state, user_action)
     state = states[late_step]
     times = []
     for repeat in range(warmup + repeats):
