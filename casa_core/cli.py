@@ -163,23 +163,36 @@ def _add_teleop(commands) -> None:
         help="a learned intent (casa-intent/1 file) the robot also knows; repeatable "
         "(for the after_learning phase)",
     )
+    command.add_argument(
+        "--demonstrations",
+        type=int,
+        default=5,
+        metavar="N",
+        help="after a CASA trial before learning that finds every known intent's confidence "
+        "below --epsilon, ask for and record N demonstrations (default 5; 0: never)",
+    )
+    command.add_argument(
+        "--epsilon", type=float, default=1.0, help="misspecification threshold (default 1.0)"
+    )
     command.set_defaults(func=_teleop)
 
 
 def _teleop(args) -> int:
     import yaml
 
-    from casa_core.study.trial import run_teleop, trial_intents
+    from casa_core.study.trial import teleop_session, trial_intents
 
     with open(args.scene, encoding="utf-8") as handle:
         layout = yaml.safe_load(handle)
     try:
-        stem = run_teleop(
+        stems, detected = teleop_session(
             layout,
             args.task,
             args.method,
             args.participant,
             args.out,
+            n_demonstrations=args.demonstrations,
+            epsilon=args.epsilon,
             phase=args.phase,
             max_duration=args.max_duration,
             intents=trial_intents(layout, args.intent),
@@ -187,7 +200,14 @@ def _teleop(args) -> int:
     except (FileExistsError, RuntimeError, ValueError) as error:
         print(f"casa teleop: {error}", file=sys.stderr)
         return 2
-    print(f"casa teleop: wrote {stem}.json and {stem}.csv")
+    for stem in stems:
+        print(f"casa teleop: wrote {stem}.json and {stem}.csv")
+    if detected:
+        print(
+            f"casa teleop: misspecification detected; {len(stems) - 1} demonstrations "
+            f"recorded. Learn the new intent with: casa learn --demos {args.out} "
+            f"--task {args.task} --name NAME --library DIR"
+        )
     return 0
 
 

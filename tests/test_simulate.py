@@ -5,7 +5,7 @@ import pandas as pd
 import yaml
 
 from casa_core import logs
-from casa_core.study import simulate
+from casa_core.study import protocol, simulate
 
 CONFIG = yaml.safe_load(open("config/ci.yaml"))
 SCENE = yaml.safe_load(open("config/scene.yaml"))
@@ -21,13 +21,13 @@ def test_participant_parameters_depend_only_on_seed_and_index():
 def test_misspecification_needs_every_beta_below_epsilon_at_the_end():
     t = np.arange(0, 10, 0.5)
     low = pd.DataFrame({"t": t, "beta:green": 0.5, "beta:purple": 0.2})
-    assert simulate.misspecification_detected(low, 1.0)
+    assert protocol.misspecification_detected(low, 1.0)
     # green explains the last seconds: not misspecified
     late = low.assign(**{"beta:green": np.where(t > 8, 2.0, 0.5)})
-    assert not simulate.misspecification_detected(late, 1.0)
+    assert not protocol.misspecification_detected(late, 1.0)
     # high early confidence that fell away is misspecification ("stays below" at the end)
     early = low.assign(**{"beta:green": np.where(t < 3, 2.0, 0.5)})
-    assert simulate.misspecification_detected(early, 1.0)
+    assert protocol.misspecification_detected(early, 1.0)
 
 
 def test_before_learning_writes_valid_logs_for_the_whole_protocol(tmp_path):

@@ -191,3 +191,40 @@ def test_learned_intent_files_join_the_known_goals_after_learning(layout, tmp_pa
     (tmp_path / "broken.intent.json").write_text("{", encoding="utf-8")
     with pytest.raises(ValueError, match="broken.intent.json"):
         trial_intents(layout, [tmp_path / "broken.intent.json"])
+
+
+@pytest.mark.parametrize(("driven_to", "detected"), [("unknown_goal", True), ("known_goal", False)])
+def test_misspecification_in_teleop_asks_for_and_records_demonstrations(
+    layout, tmp_path, driven_to, detected
+):
+    # Issue 5, item 3: when no known intent explains the person, casa teleop asks for
+    # demonstrations and records them. In an Unknown Goal trial the expert drives to
+    # the end of `driven_to`: to red, which no known intent explains, or to green,
+    # which one does.
+    from casa_core.study.trial import WaypointKeys, teleop_session
+    from casa_core.tasks import task_waypoints
+
+    stems, found = teleop_session(
+        layout,
+        "unknown_goal",
+        "CASA",
+        "h2",
+        tmp_path,
+        n_demonstrations=2,
+        make_key_source=lambda: WaypointKeys(task_waypoints(driven_to, layout)[1:]),
+        gui=False,
+        countdown=0,
+        realtime=False,
+    )
+    assert found is detected
+    if not detected:
+        assert [s.name for s in stems] == ["unknown_goal_before_learning_CASA"]
+        return
+    assert [s.name for s in stems] == [
+        "unknown_goal_before_learning_CASA",
+        "unknown_goal_demonstration_NA_1",
+        "unknown_goal_demonstration_NA_2",
+    ]
+    meta, frame = logs.read_trial(stems[1])
+    assert (meta["phase"], meta["method"], meta["source"]) == ("demonstration", "NA", "simulated")
+    assert (frame["alpha"] == 1.0).all()  # demonstrations are unassisted

@@ -16,10 +16,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from itertools import permutations
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 METHODS = ("NA", "PBA", "CASA")
 METHOD_ORDERS = tuple(permutations(METHODS))
 UNKNOWN_TASKS = ("unknown_goal", "unknown_skill")
+#: Seconds at the end of a CASA trial over which every beta_hat must stay below epsilon.
+DETECTION_WINDOW = 3.0
 
 
 @dataclass(frozen=True)
@@ -61,3 +67,16 @@ def demonstrations(task: str, n: int = 5) -> list[TrialSpec]:
 def after_learning() -> list[TrialSpec]:
     """Phase 4: CASA with the learned intents."""
     return [TrialSpec(task, "CASA", "after_learning") for task in UNKNOWN_TASKS]
+
+
+def misspecification_detected(frame: pd.DataFrame, epsilon: float) -> bool:
+    """Whether every known intent's beta_hat stayed below epsilon over the trial's last seconds.
+
+    ``frame`` is a trial log's rows (columns ``t`` and ``beta:NAME``); a trial
+    without confidences (NA) detects nothing.
+    """
+    betas = frame[[c for c in frame.columns if c.startswith("beta:")]]
+    if betas.empty:
+        return False
+    recent = frame["t"] >= frame["t"].iloc[-1] - DETECTION_WINDOW
+    return bool((betas[recent] < epsilon).all().all())

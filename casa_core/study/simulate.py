@@ -25,8 +25,6 @@ from casa_core.tasks import intended_trajectory
 
 #: Name of the intent learned for each unknown task (colours follow the goal's name).
 LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
-#: Seconds at the end of a CASA trial over which every beta_hat must stay below epsilon.
-DETECTION_WINDOW = 3.0
 #: Stream numbers of default_rng([seed, index, stream]).
 PARAMS_STREAM, LIKERT_STREAM = 0, 9999
 
@@ -40,15 +38,6 @@ def participant_params(index: int, simulation: dict) -> ParticipantParams:
     """The participant's operator parameters, drawn from the population of the config."""
     rng = np.random.default_rng([simulation["seed"], index, PARAMS_STREAM])
     return draw_participants(1, simulation["population"], rng)[0]
-
-
-def misspecification_detected(frame: pd.DataFrame, epsilon: float) -> bool:
-    """Whether every known intent's beta_hat stayed below epsilon over the trial's last seconds."""
-    betas = frame[[c for c in frame.columns if c.startswith("beta:")]]
-    if betas.empty:
-        return False
-    recent = frame["t"] >= frame["t"].iloc[-1] - DETECTION_WINDOW
-    return bool((betas[recent] < epsilon).all().all())
 
 
 def assistant_options(settings: dict) -> dict:
@@ -86,7 +75,7 @@ def simulate_before_learning(
     """Phases 1-3 and the demonstrations of one participant; returns the logs' stems.
 
     After the CASA trial of each unknown task the robot checks for misspecification
-    (:func:`misspecification_detected`, noted in the log); with
+    (:func:`casa_core.study.protocol.misspecification_detected`, noted in the log); with
     ``simulation["demonstrations_when"] == "detected"`` it asks for demonstrations
     only then, with ``"always"`` (the paper's protocol) every time.
     """
@@ -105,7 +94,7 @@ def simulate_before_learning(
             rng = np.random.default_rng([seed, index, stream])
             result = _run(scene, spec, simulation, params, rng, pid, sim)
             if spec.method == "CASA" and spec.phase == "before_learning":
-                detected[spec.task] = misspecification_detected(result.frame, epsilon)
+                detected[spec.task] = protocol.misspecification_detected(result.frame, epsilon)
                 result.meta["notes"] = f"misspecification detected: {detected[spec.task]}"
             result.write(out_dir / spec.stem)
             written.append(out_dir / spec.stem)

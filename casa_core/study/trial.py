@@ -34,10 +34,11 @@ import pandas as pd
 from casa_core.assistant import Assistant
 from casa_core.intents import GoalIntent, Intent
 from casa_core.logs import METHODS as LOG_METHODS
-from casa_core.logs import SCHEMA, TASK_PHASES, check_meta, write_trial
+from casa_core.logs import SCHEMA, TASK_PHASES, check_meta, read_trial, write_trial
 from casa_core.robot.keys import check_keys, format_keys, keys_to_action
 from casa_core.robot.sim import ArmSimulation
 from casa_core.robot.teleop import KeyboardKeys, Window
+from casa_core.study.protocol import TrialSpec, demonstrations, misspecification_detected
 
 #: Arbitration of the assistant under each method.
 METHOD_ARBITRATION = {"NA": "none", "PBA": "distance", "CASA": "confidence", "BELIEF": "belief"}
@@ -305,11 +306,6 @@ def _closed_loop(sim, assistant, source, layout, dt, ticks_per_inference, max_du
     return rows
 
 
-def trial_stem(out: Path | str, task: str, phase: str, method: str) -> Path:
-    """Where a teleoperated trial goes: ``OUT/<task>_<phase>_<method>`` (protocol naming)."""
-    return Path(out) / f"{task}_{phase}_{method}"
-
-
 def run_teleop(
     layout: dict,
     task: str,
@@ -324,8 +320,13 @@ def run_teleop(
     realtime: bool = True,
     max_duration: float = 60.0,
     intents=None,
+    repeat: int = 0,
+    title: str | None = None,
 ) -> Path:
     """Run one teleoperated trial and write its log; return the log's stem.
+
+    The log goes to ``OUT/<task>_<phase>_<method>`` (``_<repeat + 1>`` added for a
+    demonstration), the protocol's naming (:class:`casa_core.study.protocol.TrialSpec`).
 
     Parameters
     ----------
@@ -348,6 +349,10 @@ def run_teleop(
         Seconds after which the trial ends if Enter was not pressed.
     intents : sequence of Intent, optional
         What the robot knows; default the known goals green and purple.
+    repeat : int
+        Which demonstration this is (0-based), for the log's name.
+    title : str, optional
+        Shown in the window before the countdown; default task and method.
 
     Raises
     ------
@@ -357,7 +362,7 @@ def run_teleop(
         If task, method, phase or participant would not make a casa-trial/1 log.
     """
     phase = default_phase(task) if phase is None else phase
-    stem = trial_stem(out, task, phase, method)
+    stem = Path(out) / TrialSpec(task, method, phase, repeat).stem
     source_kind = "human" if key_source is None else "simulated"
     # Refuse before the person starts, not after: the log must be writable.
     planned = {"schema": SCHEMA, "participant": participant, "task": task, "method": method}
@@ -373,7 +378,7 @@ def run_teleop(
     with ArmSimulation(layout, gui=gui) as sim:
         window = Window(sim, realtime)
         source = KeyboardKeys(sim.client) if key_source is None else key_source
-        window.intro(f"{task}  ({method})", countdown)
+        window.intro(title or f"{task}  ({method})", countdown)
         started = datetime.now(UTC).isoformat(timespec="seconds")
         result = run_trial(
             layout,
@@ -392,6 +397,79 @@ def run_teleop(
         result.write(stem)
         window.finish(f"saved {stem.name}")
     return stem
+
+
+def teleop_session(
+    layout: dict,
+    task: str,
+    method: str,
+    participant: str,
+    out: Path | str,
+    *,
+    n_demonstrations: int = 5,
+    epsilon: float = 1.0,
+    make_key_source: Callable[[], KeySource] | None = None,
+    **options,
+) -> tuple[list[Path], bool]:
+    """A teleoperated trial and, if CASA finds its intents misspecified, the demonstrations.
+
+    After a CASA trial of the ``before_learning`` phase in which every known
+    intent's beta_hat stayed below ``epsilon`` at the end
+    (:func:`casa_core.study.protocol.misspecification_detected`), the robot asks the
+    person, in the window, for ``n_demonstrations`` demonstrations of the task
+    without assistance, and records each (phase ``demonstration``, method NA),
+    as the protocol does for simulated participants.
+
+    Parameters
+    ----------
+    make_key_source : callable, optional
+        Makes the key source of each trial; default the window's keyboard.
+    **options
+        Passed to :func:`run_teleop` for every trial (``phase``, ``gui``,
+        ``countdown``, ``realtime``, ``max_duration``, ``intents``).
+
+    Returns
+    -------
+    stems : list of Path
+        The logs written, the trial's first.
+    detected : bool
+        Whether misspecification was detected (and demonstrations recorded).
+    """
+
+    def source():
+        return None if make_key_source is None else make_key_source()
+
+    stem = run_teleop(layout, task, method, participant, out, key_source=source(), **options)
+    stems = [stem]
+    _, frame = read_trial(stem)
+    phase = options.get("phase") or default_phase(task)
+    detected = (
+        method == "CASA"
+        and phase == "before_learning"
+        and n_demonstrations > 0
+        and misspecification_detected(frame, epsilon)
+    )
+    if detected:
+        demo_options = {**options, "phase": "demonstration", "intents": None}
+        for spec in demonstrations(task, n_demonstrations):
+            title = (
+                "The robot could not tell what you wanted. Please show it: "
+                f"demonstration {spec.repeat + 1} of {n_demonstrations}, no assistance"
+            )
+            stems.append(
+                run_teleop(
+                    layout,
+                    task,
+                    "NA",
+                    participant,
+                    out,
+                    key_source=source(),
+                    repeat=spec.repeat,
+                    title=title,
+                    **demo_options,
+                )
+            )
+    return stems, detected
 
 
 class _ExpertThenRest(WaypointKeys):
