@@ -1,6 +1,9 @@
 # Config validation, dataset discovery and the list of outputs. No rules here.
+import json
 import re
 from pathlib import Path
+
+import yaml
 
 from snakemake.utils import validate
 
@@ -8,10 +11,26 @@ from snakemake.utils import validate
 validate(config, "../schemas/config.schema.yaml")
 # `--config allow_invalid=true` gives the string "true"; the schema admits only these spellings.
 config["allow_invalid"] = str(config["allow_invalid"]).lower() == "true"
-# The config file the package commands read (the last --configfile, else the default).
-CONFIG_FILE = workflow.overwrite_configfiles[-1] if workflow.overwrite_configfiles else "config/config.yaml"
-
 config["simulate"] = str(config["simulate"]).lower() == "true"
+
+
+def effective_config_file(path=Path("data/interim/config.yaml")):
+    """The validated config, --config overrides and schema defaults included, for the package.
+
+    The package commands read a config file; this one is what Snakemake itself
+    sees, so that `--config KEY=VALUE` reaches them too. It is rewritten (atomically)
+    only when its content changes, so that an unchanged config reruns nothing.
+    """
+    text = yaml.safe_dump(json.loads(json.dumps(config)), sort_keys=True)
+    if not path.is_file() or path.read_text(encoding="utf-8") != text:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_name(f".{path.name}.partial")
+        partial.write_text(text, encoding="utf-8")
+        partial.replace(path)
+    return str(path)
+
+
+CONFIG_FILE = effective_config_file()
 # The simulated study is the dataset data/raw/simulated, and the case study's tables
 # and figures join the default target (workflow/rules/study.smk); `--config
 # simulate=false` builds only the datasets already in data/raw.
