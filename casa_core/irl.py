@@ -56,6 +56,7 @@ runs on one thread, so the same demonstrations and seed give the same weights.
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from dataclasses import asdict, dataclass, replace
@@ -134,6 +135,10 @@ class IRLConfig:
         ... and the ends of D^phi match the demonstrations' ends: mean distance
         (m) plus 0.1 m per radian of rot difference below this (the feature
         matching MaxEnt IRL converges to; without rot, a tilt is never waited for).
+    verify_candidates : int
+        How many of the best-matching iterations are checked, at the end, by
+        planning their cost as assistance will (cold, from the demonstrations'
+        mean start); the one whose own optimum ends closest is returned.
     assist_warm_iterations : int
         Warm-started iterations of the learned intent's planner per assistance
         step (its ``warm_iterations``): one iteration costs about 1 ms with the
@@ -156,12 +161,17 @@ class IRLConfig:
     min_iterations: int = 15
     explore_iterations: int = 100
     assist_warm_iterations: int = 15
+    verify_candidates: int = 5
     tol_gap: float = 0.005
     tol_end: float = 0.005
     tol_match: float = 0.03
     planner: PlannerConfig = PlannerConfig()
 
     def __post_init__(self):
+        if self.verify_candidates < 1:
+            raise ValueError(
+                f"IRLConfig.verify_candidates must be >= 1, got {self.verify_candidates!r}"
+            )
         if self.calibration is not None and self.calibration not in COST_FORMS:
             raise ValueError(
                 f"IRLConfig.calibration must be one of {COST_FORMS} or None, "
@@ -399,8 +409,9 @@ def learn_intent(
         absolute difference of their rot, rad), ``end_moved_m`` (how far
         the ends of D^phi moved since the last iteration; None on the first),
         ``planner_iterations``, ``seconds``; on the last, ``converged``; on the
-        iteration whose weights are returned, ``kept`` (True) and, if the cost
-        was calibrated, ``calibration`` (the factor applied).
+        iterations checked at the end, ``verified_match``; on the iteration
+        whose weights are returned, ``kept`` (True) and, if the cost was
+        calibrated, ``calibration`` (the factor applied).
 
     Notes
     -----
@@ -408,10 +419,11 @@ def learn_intent(
     of that iteration's D^phi and of the demonstrations: where the person comes
     to rest, resting is free (see :class:`NeuralIntent`).
 
-    The weights returned are those under which D^phi was planned in the
-    iteration whose D^phi ended closest to the demonstrations (metres plus 0.1 m
-    per radian of rot): the last cost whose optimum was checked by planning,
-    rather than the one after further, unchecked gradient steps.
+    The weights returned are those under which D^phi was planned in one of the
+    ``verify_candidates`` iterations whose D^phi ended closest to the
+    demonstrations (metres plus 0.1 m per radian of rot): of those, the one
+    whose optimum, planned as assistance plans it, ends closest. Costs are
+    checked by planning rather than taken after further, unchecked gradient steps.
     """
     config = IRLConfig() if config is None else config
     demos = [np.asarray(d, dtype=float) for d in demos]
@@ -446,7 +458,7 @@ def learn_intent(
         starts = waypoints[:, 0, :]
         history: list[dict] = []
         samples = None
-        best = None  # (match, iteration, weights) of the best-matching iteration
+        candidates = []  # (match, iteration, weights, D^phi states) of every iteration
         began = time.perf_counter()
         for iteration in range(1, config.max_iterations + 1):
             for parameter in network.parameters():
@@ -508,38 +520,77 @@ def learn_intent(
                     "seconds": time.perf_counter() - began,
                 }
             )
-            match = _match(history[-1])
-            if best is None or match < best[0]:
-                best = (match, iteration, planned_under, plan.states)
+            candidates.append((_match(history[-1]), iteration, planned_under, plan.states))
             converged = _converged(history[-1], config)
             if iteration >= config.min_iterations and converged:
                 break
         history[-1]["converged"] = converged
-        # Return the cost whose optimal trajectories matched the demonstrations best
-        # (verified by planning), not the one after the last, unverified Adam steps.
-        _, kept, weights, kept_plan = best
-        network.load_state_dict(weights)
+
+        start = waypoints[:, 0, :].mean(axis=0)
+
+        def build(weights_of: torch.nn.Module, offset: float) -> tuple[NeuralIntent, float | None]:
+            intent = NeuralIntent(
+                name,
+                weights_of,
+                object_names,
+                objects,
+                config.cost_scale,
+                config.length_scale,
+                assist_planner(config),
+                guides=[waypoints.mean(axis=0)],
+                cost_offset=offset,
+            )
+            if config.calibration is None:
+                return intent, None
+            return calibrate(intent, start, config.calibration)
+
+        intent, kept, factor = _verified_choice(
+            candidates,
+            history,
+            network,
+            per_state,
+            demo_states,
+            waypoints,
+            build,
+            config.verify_candidates,
+        )
         history[kept - 1]["kept"] = True
-        with torch.no_grad():  # the cost at rest: the cheapest state planned or demonstrated
-            seen = torch.cat([torch.from_numpy(kept_plan[:, 1:, :]), demo_states], dim=1)
-            offset = float(per_state(seen).min())
+        if factor is not None:
+            history[kept - 1]["calibration"] = factor
     finally:
         torch.set_num_threads(threads)
-    intent = NeuralIntent(
-        name,
-        network,
-        object_names,
-        objects,
-        config.cost_scale,
-        config.length_scale,
-        assist_planner(config),
-        guides=[waypoints.mean(axis=0)],
-        cost_offset=offset,
-    )
-    if config.calibration is not None:
-        intent, factor = calibrate(intent, waypoints[:, 0, :].mean(axis=0), config.calibration)
-        history[kept - 1]["calibration"] = factor
     return intent, history
+
+
+def _verified_choice(candidates, history, network, per_state, demo_states, waypoints, build, k):
+    """The learned intent to return, the iteration whose cost it has, and its calibration.
+
+    The ``k`` iterations whose D^phi ended closest to the demonstrations are each
+    made into the intent to return (offset and calibration included) and
+    planned as assistance will plan it: a cold plan from the demonstrations'
+    mean start, guided by the mean demonstration. D^phi is warm started and can
+    miss a cheaper optimum elsewhere (e.g. the cup turned the other way) that
+    such a plan finds; the intent whose own optimum ends closest to the
+    demonstrations' mean end (metres plus 0.1 m per radian of rot) is kept.
+    Each candidate's match is recorded in its history record as
+    ``verified_match``. ``build(network, cost_offset)`` returns the intent and
+    its calibration factor (None if not calibrated).
+    """
+    start = waypoints[:, 0, :].mean(axis=0)
+    mean_end = waypoints[:, -1, :].mean(axis=0)
+    best = None
+    for _, iteration, weights, plan_states in sorted(candidates, key=lambda c: c[:2])[:k]:
+        network.load_state_dict(weights)
+        with torch.no_grad():  # the cost at rest: the cheapest state planned or demonstrated
+            seen = torch.cat([torch.from_numpy(plan_states[:, 1:, :]), demo_states], dim=1)
+            offset = float(per_state(seen).min())
+        intent, factor = build(copy.deepcopy(network), offset)
+        end = intent.optimal_trajectory(start, intent.planner.horizon)[-1]
+        match = float(np.linalg.norm(end[:3] - mean_end[:3]) + 0.1 * abs(end[3] - mean_end[3]))
+        history[iteration - 1]["verified_match"] = match
+        if best is None or match < best[0]:
+            best = (match, iteration, intent, factor)
+    return best[2], best[1], best[3]
 
 
 def _match(record: dict) -> float:

@@ -91,15 +91,20 @@ def test_training_history_is_complete(learned):
     assert history[0]["end_moved_m"] is None
     assert isinstance(history[-1]["converged"], bool)
     # Learning moved D^phi toward the demonstrations' ends, and the weights kept are
-    # those of the best-matching iteration.
+    # those of one of the best-matching iterations, checked by planning.
     kept = [h for h in history if h.get("kept")]
     assert len(kept) == 1
+    # The kept cost is the verified candidate whose own optimum ends closest.
+    verified = {h["iteration"]: h["verified_match"] for h in history if "verified_match" in h}
+    assert len(verified) == IRLConfig().verify_candidates
+    assert verified[kept[0]["iteration"]] == min(verified.values())
     assert kept[0]["end_distance_m"] < history[0]["end_distance_m"]
 
     def match(h):  # metres plus 0.1 m per radian, as documented in learn_intent
         return h["end_distance_m"] + 0.1 * h["end_rot_error"]
 
-    assert match(kept[0]) == min(match(h) for h in history)
+    best = sorted(match(h) for h in history)[: IRLConfig().verify_candidates]
+    assert match(kept[0]) in best
 
 
 def test_learned_intent_is_cheap_per_assistance_step(learned):
@@ -221,3 +226,37 @@ def test_bad_demonstrations_are_named():
         learn_intent([np.zeros((3, 5))], SCENE, "x", seed=0)
     with pytest.raises(ValueError, match=r"scene has no goals\.green"):
         learn_intent(noisy_straight_lines(GOAL, np.random.default_rng(0), n=1), {}, "x", seed=0)
+
+
+def test_a_cost_whose_own_optimum_misses_the_demonstrations_is_not_kept():
+    # D^phi is warm started and can miss a cheaper optimum elsewhere; the candidate
+    # costs are therefore checked by planning them as assistance will. Here the
+    # iteration whose D^phi matched best (1) has a cost whose optimum goes to the
+    # wrong place, and the next one (2) reaches the demonstrations' end.
+    from casa_core.intents import GoalIntent
+    from casa_core.irl import _verified_choice
+    from casa_core.planning import PlannerConfig
+
+    class Reaching(GoalIntent):
+        planner = PlannerConfig()
+
+    waypoints = np.stack([np.linspace(START, [*GOAL, 0.0], 31)] * 2)
+    network = torch.nn.Linear(1, 1)
+    weights = network.state_dict()
+    states = waypoints.copy()
+    candidates = [(0.01, 1, weights, states), (0.02, 2, weights, states), (0.5, 3, weights, states)]
+    goals = iter([[0.2, -0.3, 0.1], GOAL, GOAL])
+    history = [{"iteration": i} for i in (1, 2, 3)]
+    intent, kept, factor = _verified_choice(
+        candidates,
+        history,
+        network,
+        lambda s: s[..., 0],  # any per-state cost: only its minimum (the offset) is used
+        torch.from_numpy(waypoints[:, 1:]),
+        waypoints,
+        lambda net, offset: (Reaching("r", next(goals)), 2.0),
+        k=2,
+    )
+    assert (kept, factor) == (2, 2.0)
+    assert history[0]["verified_match"] > 0.3 and history[1]["verified_match"] < 1e-9
+    assert "verified_match" not in history[2]  # only the k best D^phi matches are checked
