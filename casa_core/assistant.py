@@ -22,7 +22,7 @@ from casa_core.confidence import _beta_hat
 from casa_core.inference import _log_likelihood, _posterior
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
-EVIDENCE = ("executed", "commanded")
+EVIDENCE = ("commanded", "executed")
 
 
 @dataclass(frozen=True)

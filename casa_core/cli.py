@@ -174,6 +174,12 @@ def _add_teleop(commands) -> None:
     command.add_argument(
         "--epsilon", type=float, default=1.0, help="misspecification threshold (default 1.0)"
     )
+    command.add_argument(
+        "--evidence",
+        choices=("commanded", "executed"),
+        help="what inference observes: the user's commanded motion (the default) or the "
+        "arm's executed motion, the robot's share included (the original implementation's)",
+    )
     command.set_defaults(func=_teleop)
 
 
@@ -196,6 +202,7 @@ def _teleop(args) -> int:
             phase=args.phase,
             max_duration=args.max_duration,
             intents=trial_intents(layout, args.intent),
+            assistant_options={"evidence": args.evidence} if args.evidence else None,
         )
     except (FileExistsError, RuntimeError, ValueError) as error:
         print(f"casa teleop: {error}", file=sys.stderr)

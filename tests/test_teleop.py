@@ -228,3 +228,30 @@ def test_misspecification_in_teleop_asks_for_and_records_demonstrations(
     meta, frame = logs.read_trial(stems[1])
     assert (meta["phase"], meta["method"], meta["source"]) == ("demonstration", "NA", "simulated")
     assert (frame["alpha"] == 1.0).all()  # demonstrations are unassisted
+
+
+@pytest.mark.parametrize("evidence", [None, "executed"])
+def test_the_log_says_what_inference_observed(layout, tmp_path, evidence):
+    # `casa teleop --evidence` reaches the assistant, and the log's notes record it
+    # (the Assistant's default, "commanded", when not given).
+    args = ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "a"]
+    parsed = build_parser().parse_args(
+        [*args, "--out", "d", *(["--evidence", evidence] if evidence else [])]
+    )
+    assert parsed.evidence == evidence
+    options = {"evidence": evidence} if evidence else None
+    stem = run_teleop(
+        layout,
+        "known_goal",
+        "CASA",
+        "h3",
+        tmp_path,
+        gui=False,
+        key_source=ScriptedKeys([(1.0, ["y+"])]),
+        countdown=0,
+        assistant_options=options,
+    )
+    meta, _ = logs.read_trial(stem)
+    assert meta["notes"] == f"evidence: {evidence or 'commanded'}"
+    with pytest.raises(SystemExit):
+        build_parser().parse_args([*args, "--out", "d", "--evidence", "robot"])

@@ -95,7 +95,8 @@ def simulate_before_learning(
             result = _run(scene, spec, simulation, params, rng, pid, sim)
             if spec.method == "CASA" and spec.phase == "before_learning":
                 detected[spec.task] = protocol.misspecification_detected(result.frame, epsilon)
-                result.meta["notes"] = f"misspecification detected: {detected[spec.task]}"
+                note = f"misspecification detected: {detected[spec.task]}"
+                result.meta["notes"] = "; ".join(filter(None, [result.meta.get("notes"), note]))
             result.write(out_dir / spec.stem)
             written.append(out_dir / spec.stem)
         stream = len(specs) + 1

@@ -266,6 +266,8 @@ def run_trial(
         "source": source_kind,
         "intents": [intent.name for intent in intents],
     }
+    if assistant.arbitration != "none":  # what inference observed (Assistant, evidence)
+        meta["notes"] = f"evidence: {assistant.evidence}"
     if seed is not None:
         meta["seed"] = int(seed)
     return TrialResult(meta=meta, frame=pd.DataFrame(rows))
@@ -322,6 +324,7 @@ def run_teleop(
     intents=None,
     repeat: int = 0,
     title: str | None = None,
+    assistant_options: dict | None = None,
 ) -> Path:
     """Run one teleoperated trial and write its log; return the log's stem.
 
@@ -353,6 +356,9 @@ def run_teleop(
         Which demonstration this is (0-based), for the log's name.
     title : str, optional
         Shown in the window before the countdown; default task and method.
+    assistant_options : dict, optional
+        Extra keyword arguments of :class:`~casa_core.assistant.Assistant` (e.g.
+        ``evidence``).
 
     Raises
     ------
@@ -391,6 +397,7 @@ def run_teleop(
             source_kind=source_kind,
             max_duration=max_duration,
             sim=sim,
+            assistant_options=assistant_options,
             on_tick=window.on_tick,
         )
         result.meta["started_at"] = started
@@ -426,7 +433,8 @@ def teleop_session(
         Makes the key source of each trial; default the window's keyboard.
     **options
         Passed to :func:`run_teleop` for every trial (``phase``, ``gui``,
-        ``countdown``, ``realtime``, ``max_duration``, ``intents``).
+        ``countdown``, ``realtime``, ``max_duration``, ``intents``,
+        ``assistant_options``).
 
     Returns
     -------
