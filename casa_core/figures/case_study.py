@@ -58,13 +58,7 @@ def prepare_steps(steps: pd.DataFrame, participant: str | None = None) -> tuple[
     rows = steps[steps["participant"].astype(str) == participant]
     rows = rows[rows["task"].isin(list(style.TASK_LABELS))].copy()
     rows = style.numeric_columns(rows, ["t", "alpha", "beta", "belief"], "steps")
-    conditions = []
-    for index, row in rows.iterrows():
-        try:
-            conditions.append(style.condition_of(str(row["method"]), str(row["phase"])))
-        except ValueError as error:
-            raise ValueError(f"steps row {index}: {error}") from None
-    rows["condition"] = conditions
+    rows = style.label_conditions(rows, "steps")
     twice = rows.duplicated(["task", "condition", "t", "intent"], keep=False)
     if twice.any():
         index = twice.idxmax()

@@ -16,6 +16,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from casa_core.figures import _bars, style
+from casa_core.study import protocol
 
 #: The panels: trials.csv column, axis label (with units), and the names the stats table
 #: may give the metric, in order of preference (the paper tests effort as relative effort).
@@ -26,7 +27,7 @@ METRICS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
 )
 
 #: Phases whose trials are not part of the comparison of methods.
-EXCLUDED_PHASES = ("familiarization", "demonstration")
+EXCLUDED_PHASES = protocol.UNANALYSED_PHASES
 
 #: How the stats table may name a set of tasks pooled in one analysis (the ANCOVA over
 #: the two misspecified tasks).
@@ -140,13 +141,7 @@ def prepare_trials(trials: pd.DataFrame) -> pd.DataFrame:
     )
     rows = trials[trials["task"].isin(list(style.TASK_LABELS))]
     rows = rows[~rows["phase"].isin(EXCLUDED_PHASES)].copy()
-    conditions = []
-    for index, row in rows.iterrows():
-        try:
-            conditions.append(style.condition_of(str(row["method"]), str(row["phase"])))
-        except ValueError as error:
-            raise ValueError(f"trials row {index}: {error}") from None
-    rows["condition"] = conditions
+    rows = style.label_conditions(rows, "trials")
     return rows
 
 

@@ -20,13 +20,15 @@ import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from casa_core.study import protocol
+
 #: Resolution of the PNG copies (the issue asks for 200 dpi).
 PNG_DPI = 200
 
 #: The study's conditions in the paper's order and words. A condition is a method in a
 #: phase: CASA appears without misspecification, before and after learning. The protocol
 #: runs only CASA after learning; NA or PBA after learning would be conditions of their own
-#: (as in :func:`casa_core.stats.study.condition_of`).
+#: (as in :func:`casa_core.study.protocol.condition_of`).
 CONDITIONS: tuple[str, ...] = (
     "NA",
     "PBA",
@@ -80,20 +82,30 @@ def condition_of(method: str, phase: str) -> str:
     phase : str
         The trial's phase (casa-trial/1). CASA in ``before_learning`` and
         ``after_learning`` is the paper's "CASA before / after learning"; NA and PBA keep
-        their names except after learning. The same rule as the stats table's.
+        their names except after learning. The stats table's rule
+        (:func:`casa_core.study.protocol.condition_of`); phases it does not analyse keep
+        the method's name.
 
     Returns
     -------
     str
         One of :data:`CONDITIONS`.
     """
-    if method not in ("NA", "PBA", "CASA"):
+    if method not in protocol.METHODS:
         raise ValueError(f"unknown method {method!r}; expected NA, PBA or CASA")
-    if method == "CASA" and phase == "before_learning":
-        return "CASA before learning"
-    if phase == "after_learning":
-        return f"{method} after learning"
-    return method
+    return protocol.condition_of(method, phase) or method
+
+
+def label_conditions(rows: pd.DataFrame, table: str) -> pd.DataFrame:
+    """``rows`` with a ``condition`` column (:func:`condition_of`); an error names the row."""
+    conditions = []
+    for index, row in rows.iterrows():
+        try:
+            conditions.append(condition_of(str(row["method"]), str(row["phase"])))
+        except ValueError as error:
+            raise ValueError(f"{table} row {index}: {error}") from None
+    rows["condition"] = conditions
+    return rows
 
 
 def intent_colours(names: Iterable[str]) -> dict[str, str]:

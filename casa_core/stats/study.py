@@ -20,6 +20,7 @@ import pandas as pd
 
 from casa_core.stats import apa, between, within
 from casa_core.stats._tables import numeric_column, require_columns
+from casa_core.study.protocol import condition_of
 
 STATS_COLUMNS = [
     "hypothesis",
@@ -59,20 +60,6 @@ CONDITION_ORDER = [
 TRIAL_KEYS = ["participant", "task", "method", "phase"]
 LIKERT_KEYS = [*TRIAL_KEYS, "question", "score"]
 ALPHA = 0.05
-
-
-def condition_of(method: str, phase: str) -> str | None:
-    """The paper's name for a method in a phase, or None for phases that are not analysed.
-
-    CASA in ``before_learning`` / ``after_learning`` is "CASA before learning" / "CASA after
-    learning"; NA and PBA keep their names in ``no_misspecification`` and ``before_learning``.
-    Familiarization and demonstration trials are not analysed.
-    """
-    if phase in ("familiarization", "demonstration"):
-        return None
-    if method == "CASA":
-        return {"before_learning": CASA_BEFORE, "after_learning": CASA_AFTER}.get(phase, "CASA")
-    return f"{method} after learning" if phase == "after_learning" else method
 
 
 def _conditions(table: pd.DataFrame, what: str) -> pd.DataFrame:

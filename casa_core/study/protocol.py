@@ -24,6 +24,8 @@ if TYPE_CHECKING:
 METHODS = ("NA", "PBA", "CASA")
 METHOD_ORDERS = tuple(permutations(METHODS))
 UNKNOWN_TASKS = ("unknown_goal", "unknown_skill")
+#: Phases whose trials are not study conditions (practice and demonstrations).
+UNANALYSED_PHASES = ("familiarization", "demonstration")
 #: Seconds at the end of a CASA trial over which every beta_hat must stay below epsilon.
 DETECTION_WINDOW = 3.0
 
@@ -42,6 +44,20 @@ class TrialSpec:
         """File stem of the trial's log, unique within a participant."""
         suffix = f"_{self.repeat + 1}" if self.phase == "demonstration" else ""
         return f"{self.task}_{self.phase}_{self.method}{suffix}"
+
+
+def condition_of(method: str, phase: str) -> str | None:
+    """The paper's name for a method in a phase, or None for phases that are not analysed.
+
+    CASA in ``before_learning`` / ``after_learning`` is "CASA before learning" / "CASA after
+    learning"; NA and PBA keep their names in ``no_misspecification`` and ``before_learning``.
+    Familiarization and demonstration trials are not analysed.
+    """
+    if phase in UNANALYSED_PHASES:
+        return None
+    if method == "CASA" and phase == "before_learning":
+        return "CASA before learning"
+    return f"{method} after learning" if phase == "after_learning" else method
 
 
 def method_order(participant_index: int) -> tuple[str, ...]:

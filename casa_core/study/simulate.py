@@ -187,7 +187,7 @@ def simulated_surveys(
     for folder in folders:
         for json_path in sorted(Path(folder).glob("*.json")):
             meta, frame = logs.read_trial(json_path.with_suffix(""))
-            if meta["phase"] in ("familiarization", "demonstration"):
+            if meta["phase"] in protocol.UNANALYSED_PHASES:
                 continue
             measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt)
             trials[(meta["task"], meta["method"], meta["phase"])] = (measured, frame)
