@@ -1,0 +1,83 @@
+"""The one way outputs are written: atomically, readable by the whole lab (mode 0644).
+
+Each output is written to a temporary file in its own folder and renamed over the
+target, so readers never see half a file and a killed run leaves the previous file
+intact.
+
+Examples
+--------
+>>> import tempfile, pandas as pd
+>>> folder = tempfile.mkdtemp()
+>>> path = write_csv(f"{folder}/table.csv", pd.DataFrame({"a": [1, 2]}))
+>>> path.read_text()
+'a\\n1\\n2\\n'
+>>> oct(path.stat().st_mode & 0o777)
+'0o644'
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pandas as pd
+
+#: Permissions of every output: the owner writes, everyone reads.
+FILE_MODE = 0o644
+
+
+@contextmanager
+def atomic_path(path: Path | str) -> Iterator[Path]:
+    """A temporary path beside ``path``; renamed to ``path`` when the block succeeds.
+
+    For writers that need a file name (matplotlib, torch). The temporary file keeps
+    ``path``'s suffix, so that writers that choose a format by suffix still do.
+    On an error the temporary file is removed and ``path`` is untouched.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.chmod(tmp, FILE_MODE)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_bytes(path: Path | str, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically; return the path."""
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+    return Path(path)
+
+
+def atomic_write_text(path: Path | str, text: str) -> Path:
+    """Write ``text`` (UTF-8, line ends as given) to ``path`` atomically; return the path."""
+    return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def frame_to_csv_text(frame: pd.DataFrame) -> str:
+    """A table as CSV text: header, ``\\n`` line ends, shortest round-trip floats, no index.
+
+    The same table always gives the same bytes, which keeps processed tables reproducible.
+
+    Examples
+    --------
+    >>> frame_to_csv_text(pd.DataFrame({"t": [0.0, 0.05], "keys": ["x+", ""]}))
+    't,keys\\n0.0,x+\\n0.05,\\n'
+    """
+    buffer = io.StringIO()
+    frame.to_csv(buffer, index=False, lineterminator="\n")
+    return buffer.getvalue()
+
+
+def write_csv(path: Path | str, frame: pd.DataFrame) -> Path:
+    """Write a table as CSV (:func:`frame_to_csv_text`) atomically; return the path."""
+    return atomic_write_text(path, frame_to_csv_text(frame))

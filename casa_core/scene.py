@@ -1,0 +1,192 @@
+"""The task scene: where the arm starts, the goals, the pouring target and the teleoperation.
+
+One :class:`Scene` describes a study's layout in the robot base frame (metres, radians;
+the JACO base at the origin on the table top, z up). It is loaded and validated from a
+YAML file (``config/scene.yaml``) once, at the edge, and passed down; every error names
+the key and the rule it breaks.
+
+Examples
+--------
+>>> scene = load_scene()
+>>> scene.start_state.tolist()
+[0.45, -0.22, 0.38, 0.0]
+>>> scene.goal("green").tolist()
+[0.58, 0.0, 0.3]
+>>> scene.teleop.dt
+0.05
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+import yaml
+
+#: The scene the package is set up with: ``config/scene.yaml`` of the repository. A path
+#: given by a user is resolved against the working directory instead.
+DEFAULT_SCENE = Path(__file__).resolve().parents[1] / "config" / "scene.yaml"
+#: Goals every study scene has: the two known goals and the unknown one.
+REQUIRED_GOALS = ("green", "purple", "red")
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be used; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where every trial starts: end-effector ``position`` (m) and the rotate keys' ``rot``."""
+
+    position: tuple[float, float, float]
+    rot: float
+
+
+@dataclass(frozen=True)
+class Pouring:
+    """The Unknown Skill: hold the cup at ``position``, above the ``bowl``, tilted to ``tilt``."""
+
+    position: tuple[float, float, float]
+    bowl: tuple[float, float, float]
+    tilt: float
+
+
+@dataclass(frozen=True)
+class Teleop:
+    """The keyboard: ``speed`` (m/s per key), ``rot_speed`` (rad/s) and the tick ``dt`` (s)."""
+
+    speed: float
+    rot_speed: float
+    dt: float
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A study's layout; build it with :func:`load_scene` or :meth:`Scene.from_dict`.
+
+    Attributes
+    ----------
+    start : Start
+    goals : Mapping[str, tuple of 3 floats]
+        Goal positions by name (read-only); at least ``green``, ``purple`` and ``red``.
+    pouring : Pouring
+    teleop : Teleop
+    """
+
+    start: Start
+    goals: MappingProxyType
+    pouring: Pouring
+    teleop: Teleop
+
+    @property
+    def start_state(self) -> np.ndarray:
+        """The state ``[x, y, z, rot]`` in which every trial starts."""
+        return np.array([*self.start.position, self.start.rot], dtype=float)
+
+    def goal(self, name: str) -> np.ndarray:
+        """The position of goal ``name``; ValueError naming the goals there are."""
+        if name not in self.goals:
+            raise SceneError(f"scene: goals has no {name!r}; it has {', '.join(self.goals)}")
+        return np.array(self.goals[name], dtype=float)
+
+    @classmethod
+    def from_dict(cls, data: Any, source: str = "scene") -> Scene:
+        """Validate a parsed scene file; ``source`` names it in errors."""
+        reader = _Reader(source)
+        top = reader.mapping(data, "", ("start", "goals", "pouring", "teleop"))
+        start = reader.mapping(top["start"], "start", ("position", "rot"))
+        goals = reader.mapping(top["goals"], "goals", None)
+        missing = [name for name in REQUIRED_GOALS if name not in goals]
+        if missing:
+            raise SceneError(
+                f"{source}: goals.{missing[0]}: missing (required: green, purple, red)"
+            )
+        pouring = reader.mapping(top["pouring"], "pouring", ("position", "bowl", "tilt"))
+        teleop = reader.mapping(top["teleop"], "teleop", ("speed", "rot_speed", "dt"))
+        return cls(
+            start=Start(reader.vector(start, "start.position"), reader.number(start, "start.rot")),
+            goals=MappingProxyType(
+                {str(name): reader.vector(goals, f"goals.{name}") for name in goals}
+            ),
+            pouring=Pouring(
+                reader.vector(pouring, "pouring.position"),
+                reader.vector(pouring, "pouring.bowl"),
+                reader.number(pouring, "pouring.tilt"),
+            ),
+            teleop=Teleop(
+                reader.number(teleop, "teleop.speed", positive=True),
+                reader.number(teleop, "teleop.rot_speed", positive=True),
+                reader.number(teleop, "teleop.dt", positive=True),
+            ),
+        )
+
+
+def load_scene(path: Path | str | None = None) -> Scene:
+    """Load and validate a scene file; default :data:`DEFAULT_SCENE`.
+
+    Raises
+    ------
+    SceneError
+        Naming the file and the key: a missing or unreadable file, a missing or unknown
+        key, a value of the wrong kind.
+    """
+    path = DEFAULT_SCENE if path is None else Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise SceneError(f"cannot read the scene {path}: {error}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        raise SceneError(f"{path}: not valid YAML: {error}") from None
+    return Scene.from_dict(data, str(path))
+
+
+class _Reader:
+    """Checks of one scene file, each error naming the file and the dotted key."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, key: str, rule: str):
+        where = f"{self.source}: {key}" if key else self.source
+        raise SceneError(f"{where}: {rule}")
+
+    def mapping(self, node, key: str, required: tuple[str, ...] | None) -> dict:
+        if not isinstance(node, dict):
+            self.fail(key, f"must be a mapping, got {node!r}")
+        if required is not None:
+            prefix = f"{key}." if key else ""
+            for name in required:
+                if name not in node:
+                    self.fail(f"{prefix}{name}", "missing")
+            for name in node:
+                if name not in required:
+                    self.fail(f"{prefix}{name}", f"unknown key; expected {', '.join(required)}")
+        return node
+
+    def number(self, node: dict, key: str, *, positive: bool = False) -> float:
+        value = node[key.rsplit(".", 1)[-1]]
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+        ):
+            self.fail(key, f"must be a finite number, got {value!r}")
+        if positive and value <= 0:
+            self.fail(key, f"must be positive, got {value!r}")
+        return float(value)
+
+    def vector(self, node: dict, key: str) -> tuple[float, float, float]:
+        value = node[key.rsplit(".", 1)[-1]]
+        numbers = isinstance(value, list) and all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        )
+        if not numbers or len(value) != 3:
+            self.fail(key, f"must be 3 finite numbers [x, y, z], got {value!r}")
+        return (float(value[0]), float(value[1]), float(value[2]))

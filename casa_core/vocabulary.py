@@ -1,0 +1,119 @@
+"""The study's vocabulary: tasks, methods, phases, conditions, keys and Likert questions.
+
+Every other module (logs, statistics, figures, the protocol, the command line and the
+workflow's rules) takes these names from here, so that each is defined once. Names are
+the ones written in trial logs (``casa-trial/1``, see ``docs/data-contracts.md``);
+``*_LABELS`` give the paper's words for display.
+
+Examples
+--------
+>>> condition_of("CASA", "after_learning")
+'CASA after learning'
+>>> condition_of("NA", "demonstration") is None
+True
+"""
+
+from __future__ import annotations
+
+#: The study's tasks, in the order the protocol runs them (paper, Sec. V-A).
+TASKS = ("familiarization", "known_goal", "unknown_goal", "unknown_skill")
+#: The well-specified task: its goal is one of the robot's known intents.
+KNOWN_TASK = "known_goal"
+#: The misspecified tasks: the robot learns their intents from demonstrations.
+UNKNOWN_TASKS = ("unknown_goal", "unknown_skill")
+#: The paper's names of the tasks.
+TASK_LABELS = {
+    "familiarization": "Familiarization",
+    "known_goal": "Known Goal",
+    "unknown_goal": "Unknown Goal",
+    "unknown_skill": "Unknown Skill",
+}
+
+#: Assistance methods: direct teleoperation, policy blending, confidence-aware.
+METHODS = ("NA", "PBA", "CASA")
+
+#: The protocol's phases, in order.
+PHASES = (
+    "familiarization",
+    "no_misspecification",
+    "before_learning",
+    "demonstration",
+    "after_learning",
+)
+#: The phases each task is run in: the unknown tasks go through learning.
+TASK_PHASES = {
+    "familiarization": ("familiarization",),
+    "known_goal": ("no_misspecification",),
+    "unknown_goal": ("before_learning", "demonstration", "after_learning"),
+    "unknown_skill": ("before_learning", "demonstration", "after_learning"),
+}
+#: Phases run with one method only: demonstrations without assistance, CASA after learning.
+PHASE_METHOD = {"demonstration": "NA", "after_learning": "CASA"}
+#: Phases in which a participant does each condition once (repeats would be counted twice).
+SINGLE_TRIAL_PHASES = ("no_misspecification", "before_learning", "after_learning")
+#: Phases whose trials are not study conditions: practice and demonstrations.
+UNANALYSED_PHASES = ("familiarization", "demonstration")
+
+#: Who produced a log.
+SOURCES = ("human", "simulated")
+
+#: The eight keys of the keyboard interface: +- along x, y, z and the two rotate keys.
+KEYS = ("x+", "x-", "y+", "y-", "z+", "z-", "rot+", "rot-")
+
+#: The paper's three 7-point Likert questions, and their display names.
+QUESTIONS = ("understood", "effortless", "useful")
+QUESTION_LABELS = {"understood": "Understood", "effortless": "Effortless", "useful": "Useful"}
+
+CASA_BEFORE_LEARNING = "CASA before learning"
+CASA_AFTER_LEARNING = "CASA after learning"
+#: The study's conditions, in the paper's order and words. A condition is a method in a
+#: phase; the protocol runs only CASA after learning, but NA or PBA after learning (a
+#: lab's own design) are conditions of their own.
+CONDITIONS = (
+    "NA",
+    "PBA",
+    "CASA",
+    CASA_BEFORE_LEARNING,
+    CASA_AFTER_LEARNING,
+    "NA after learning",
+    "PBA after learning",
+)
+
+
+def condition_of(method: str, phase: str) -> str | None:
+    """The study condition of a trial, in the paper's words; None for unanalysed phases.
+
+    CASA before and after learning are conditions of their own; NA and PBA keep their
+    names except after learning. Familiarization and demonstration trials
+    (:data:`UNANALYSED_PHASES`) are not conditions.
+
+    Parameters
+    ----------
+    method : {"NA", "PBA", "CASA"}
+    phase : str
+        One of :data:`PHASES`.
+
+    Returns
+    -------
+    str or None
+        One of :data:`CONDITIONS`, or None.
+
+    Raises
+    ------
+    ValueError
+        If ``method`` is not one of :data:`METHODS`.
+
+    Examples
+    --------
+    >>> condition_of("PBA", "before_learning")
+    'PBA'
+    >>> condition_of("CASA", "before_learning")
+    'CASA before learning'
+    """
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    if phase in UNANALYSED_PHASES:
+        return None
+    if method == "CASA" and phase == "before_learning":
+        return CASA_BEFORE_LEARNING
+    return f"{method} after learning" if phase == "after_learning" else method
