@@ -3,39 +3,69 @@
 The blended action is u = alpha T(a) + (1 - alpha) u*, where T(a) is the direct
 teleoperation of the user's input and u* the robot's action for the most likely
 intent; alpha = 1 gives the user full control.
+
+Each formula lives in one unchecked core (``_alpha_confidence``, ``_alpha_distance``,
+``_alpha_belief``), called by the public function after checking its input and by the
+assistant on its per-step path, on input it has checked once.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from casa_core._checks import as_finite_or_inf, scalar_or_array
+from casa_core._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
 def alpha_confidence(beta):
     """CASA's arbitration: alpha = min(1, 1 / beta_hat of the most likely intent).
 
+    Parameters
+    ----------
+    beta : float or array_like
+        beta_hat of the most likely intent theta*, >= 0 (``inf`` allowed).
+
+    Returns
+    -------
+    float or ndarray
+        alpha in [0, 1]: 1 for ``beta <= 1`` (also ``beta = 0``), 0 for ``beta = inf``.
+
+    Examples
+    --------
     >>> alpha_confidence([0.5, 4.0])
     array([1.  , 0.25])
+    >>> alpha_confidence(np.inf)
+    0.0
     """
     beta = as_finite_or_inf("beta", beta, nonnegative=True)
-    with np.errstate(divide="ignore"):
-        return scalar_or_array(np.minimum(1.0, 1.0 / beta))
+    return scalar_or_array(_alpha_confidence(beta))
 
 
 def alpha_distance(distance, D):
     """Policy blending's arbitration (PBA): alpha = min(1, d / D).
 
-    ``d`` is the distance to the predicted goal and ``D`` the distance past which
-    the robot does not assist (0.55 m in the original implementation).
+    Parameters
+    ----------
+    distance : float or array_like
+        d, the distance (m) from the end effector to the predicted goal, >= 0.
+    D : float
+        The distance past which the robot does not assist, > 0 (0.55 m in the
+        original implementation).
 
+    Returns
+    -------
+    float or ndarray
+        alpha in [0, 1].
+
+    Examples
+    --------
     >>> alpha_distance(0.275, 0.55)
     0.5
+    >>> alpha_distance([0.0, 1.0], 0.55)
+    array([0., 1.])
     """
     distance = as_finite_or_inf("distance", distance, nonnegative=True)
-    if not (np.isfinite(D) and D > 0):
-        raise ValueError(f"D (assistance distance) must be a positive number, got {D!r}")
-    return scalar_or_array(np.minimum(1.0, distance / D))
+    require_positive(D=D)
+    return scalar_or_array(_alpha_distance(distance, D))
 
 
 def alpha_belief(p_star, n_intents):
@@ -43,24 +73,53 @@ def alpha_belief(p_star, n_intents):
 
     The paper's text gives (P* |Theta| - 1) / (|Theta| - 1) but describes the
     behaviour "belief goes to 1 and thus sets the user's control authority to 0";
-    we build the described behaviour (NOTES section 2): alpha = 1 for a uniform
-    belief, 0 for a certain one.
+    we build the described behaviour (see docs/departures.md): alpha = 1 for a
+    uniform belief, 0 for a certain one.
 
+    Parameters
+    ----------
+    p_star : float or array_like
+        P(theta* | xi), the belief in the most likely intent, in [0, 1].
+    n_intents : int
+        |Theta|, the number of intents, >= 2.
+
+    Returns
+    -------
+    float or ndarray
+        alpha, clipped to [0, 1].
+
+    Examples
+    --------
     >>> alpha_belief([0.5, 1.0], 2)
     array([1., 0.])
+    >>> alpha_belief(2 / 3, 3)
+    0.5
     """
     p_star = as_finite_or_inf("p_star", p_star)
     if ((p_star < 0) | (p_star > 1)).any():
         raise ValueError("p_star must be a probability in [0, 1]")
     if int(n_intents) != n_intents or n_intents < 2:
         raise ValueError(f"belief arbitration needs at least 2 intents, got {n_intents!r}")
-    alpha = 1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0)
-    return scalar_or_array(np.clip(alpha, 0.0, 1.0))
+    return scalar_or_array(_alpha_belief(p_star, n_intents))
 
 
 def blend(alpha, user_action, robot_action):
     """Policy blending: alpha * user_action + (1 - alpha) * robot_action.
 
+    Parameters
+    ----------
+    alpha : float or array_like
+        The user's control authority, in [0, 1].
+    user_action, robot_action : array_like
+        T(a), the direct teleoperation of the user's input, and u*, the robot's action.
+
+    Returns
+    -------
+    ndarray
+        The blended action u.
+
+    Examples
+    --------
     >>> blend(0.25, np.array([1.0, 0.0]), np.array([0.0, 1.0]))
     array([0.25, 0.75])
     """
@@ -72,14 +131,17 @@ def blend(alpha, user_action, robot_action):
     return alpha * user + (1.0 - alpha) * robot
 
 
-# Scalar cores on checked input, for the assistant's per-step path (same formulas).
-def _alpha_confidence(beta: float) -> float:
-    return 1.0 if beta <= 1.0 else 1.0 / beta
+def _alpha_confidence(beta):
+    """:func:`alpha_confidence` on checked input; 1 / 0 is inf, so beta = 0 gives 1."""
+    with np.errstate(divide="ignore"):
+        return np.minimum(1.0, np.divide(1.0, beta))
 
 
-def _alpha_distance(distance: float, D: float) -> float:
-    return min(1.0, distance / D)
+def _alpha_distance(distance, D):
+    """:func:`alpha_distance` on checked input (D > 0)."""
+    return np.minimum(1.0, distance / D)
 
 
-def _alpha_belief(p_star: float, n_intents: int) -> float:
-    return min(1.0, max(0.0, 1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0)))
+def _alpha_belief(p_star, n_intents):
+    """:func:`alpha_belief` on checked input (n_intents >= 2)."""
+    return np.clip(1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0), 0.0, 1.0)

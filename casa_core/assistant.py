@@ -17,12 +17,35 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from casa_core._checks import require_positive
 from casa_core.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance, blend
-from casa_core.confidence import _beta_hat
+from casa_core.confidence import _beta_hat, _suboptimality
 from casa_core.inference import _log_likelihood, _posterior
+from casa_core.intents import DT, SPEED
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
 EVIDENCE = ("commanded", "executed")
+
+# Defaults of the model's parameters, written once; where each value comes from and what
+# restores another choice: docs/departures.md (symbols: docs/paper-to-code.md).
+#: k, the action dimensionality: the JACO arm's 7 joint velocities.
+K = 7
+#: lambda, the rate of the exponential prior on beta (the original implementation's).
+LAM = 4.0
+#: epsilon, the misspecification threshold on beta_hat (not in the original; related work's).
+EPSILON = 1.0
+#: D of distance arbitration (PBA), metres (the original implementation's).
+PBA_DISTANCE = 0.55
+#: Factor on the suboptimality: the original implementation divides it by 1.8.
+SUBOPT_SCALE = 1 / 1.8
+#: T, the episode horizon, seconds (the original implementation's).
+HORIZON = 15.0
+# DT (seconds between inference steps and trajectory states: inference twice per second)
+# and SPEED (the speed limit of u*, m/s) are the intents' (casa_core.intents).
+#: Rotation speed limit of u* (rad/s), the keyboard's rotate keys.
+ROT_SPEED = 0.5
+#: The control tick, seconds (20 Hz).
+TICK = 0.05
 
 
 @dataclass(frozen=True)
@@ -71,21 +94,21 @@ class Assistant:
         "confidence" is CASA (alpha = min(1, 1/beta_hat*)); "distance" is the
         policy-blending baseline PBA (beta fixed at 1, alpha = min(1, d/D));
         "belief" arbitrates on P(theta*|xi); "none" is direct teleoperation (NA).
-    k : int
+    k : int, default K
         Action dimensionality (7 joint velocities).
-    lam : float
+    lam : float, default LAM
         Exponential prior rate on beta (MAP estimate; the original used 4).
-    epsilon : float
-        Misspecification threshold on beta_hat (1.0 as in related work, NOTES).
-    pba_distance : float
+    epsilon : float, default EPSILON
+        Misspecification threshold on beta_hat (1.0 as in related work).
+    pba_distance : float, default PBA_DISTANCE
         D of distance arbitration, metres (0.55 in the original).
-    subopt_scale : float
+    subopt_scale : float, default SUBOPT_SCALE
         Factor applied to suboptimality before use (the original divides by 1.8).
-    horizon : float
+    horizon : float, default HORIZON
         T, the episode horizon in seconds (15 in the original).
-    dt : float
+    dt : float, default DT
         Seconds between inference steps and trajectory states (0.5).
-    speed, rot_speed : float
+    speed, rot_speed : float, default SPEED, ROT_SPEED
         Limits of the robot action u*: m/s for the position, rad/s for rot.
     evidence : {"commanded", "executed"}
         What the trajectory xi_{0->t} of inference is. The paper's model is one
@@ -100,26 +123,45 @@ class Assistant:
         step, ``c(x_j -> x^H_{j+1}) + C*(x^H_{j+1}) - C*(x_{j+1})`` added to
         the prefix cost, so that the robot's own motion is never evidence for
         the intent it assists. Both are the same while alpha = 1.
-    tick : float
+    tick : float, default TICK
         Seconds each :meth:`act` is applied for (the 20 Hz control tick); with
         ``evidence="commanded"`` it turns the robot's share into displacement.
+
+    Raises
+    ------
+    ValueError
+        On an unknown ``arbitration`` or ``evidence``, no or duplicate intent names,
+        or a parameter out of range (naming it).
+
+    Examples
+    --------
+    >>> from casa_core.intents import GoalIntent
+    >>> intents = [GoalIntent("green", [0.3, 0.4, 0.0]), GoalIntent("red", [-0.4, 0.1, 0.2])]
+    >>> assistant = Assistant(intents, arbitration="confidence")
+    >>> assistant.reset([0.0, 0.0, 0.0, 0.0])
+    >>> step = assistant.update([0.015, 0.02, 0.0, 0.0])  # 0.025 m toward green
+    >>> step.intent, step.alpha
+    ('green', 1.0)
+    >>> assistant.act([0.015, 0.02, 0.0, 0.0], np.zeros(4)).shape
+    (4,)
     """
 
     def __init__(
         self,
         intents,
+        *,
         arbitration: str = "confidence",
-        k: int = 7,
-        lam: float = 4.0,
-        epsilon: float = 1.0,
-        pba_distance: float = 0.55,
-        subopt_scale: float = 1 / 1.8,
-        horizon: float = 15.0,
-        dt: float = 0.5,
-        speed: float = 0.05,
-        rot_speed: float = 0.5,
+        k: int = K,
+        lam: float = LAM,
+        epsilon: float = EPSILON,
+        pba_distance: float = PBA_DISTANCE,
+        subopt_scale: float = SUBOPT_SCALE,
+        horizon: float = HORIZON,
+        dt: float = DT,
+        speed: float = SPEED,
+        rot_speed: float = ROT_SPEED,
         evidence: str = "commanded",
-        tick: float = 0.05,
+        tick: float = TICK,
     ):
         if arbitration not in ARBITRATIONS:
             raise ValueError(f"arbitration must be one of {ARBITRATIONS}, got {arbitration!r}")
@@ -131,35 +173,39 @@ class Assistant:
             raise ValueError("the assistant needs at least one intent")
         if len(set(names)) != len(names):
             raise ValueError(f"intent names must be unique, got {names}")
-        for key, value in (
-            ("k", k),
-            ("pba_distance", pba_distance),
-            ("subopt_scale", subopt_scale),
-            ("horizon", horizon),
-            ("dt", dt),
-            ("tick", tick),
-        ):
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{key} must be a positive number, got {value!r}")
+        require_positive("Assistant", k=k, pba_distance=pba_distance, subopt_scale=subopt_scale)
+        require_positive("Assistant", horizon=horizon, dt=dt, tick=tick)
+        require_positive("Assistant", speed=speed, rot_speed=rot_speed)
         if not (np.isfinite(lam) and lam >= 0):
-            raise ValueError(f"lam must be a number >= 0, got {lam!r}")
-        self.arbitration = arbitration
-        self.k = k
-        self.lam = lam
-        self.epsilon = epsilon
-        self.pba_distance = pba_distance
-        self.subopt_scale = subopt_scale
-        self.horizon = horizon
-        self.dt = dt
-        self.speed = speed
-        self.rot_speed = rot_speed
-        self.evidence = evidence
-        self.tick = tick
+            raise ValueError(f"lam of Assistant must be a number >= 0, got {lam!r}")
+        if np.isnan(epsilon):
+            raise ValueError("epsilon of Assistant must be a number, got nan")
+        self.arbitration, self.evidence = arbitration, evidence
+        self.k, self.lam, self.epsilon = k, lam, epsilon
+        self.pba_distance, self.subopt_scale = pba_distance, subopt_scale
+        self.horizon, self.dt, self.tick = horizon, dt, tick
+        self.speed, self.rot_speed = speed, rot_speed
         self.names = names
+        # The trial's state, set by reset(); None until then.
+        self._steps = 0
+        self._last_state: np.ndarray | None = None
+        self._prefix = np.zeros(len(self.intents))
+        self._optimal = np.zeros(len(self.intents))
+        self._plan: np.ndarray | None = None
+        self._plan_intent: int | None = None
+        self._plan_origin = 0
+        self._robot_motion: np.ndarray | None = None
+        self.latest: Inference | None = None
+
+    def _require_reset(self, method: str) -> None:
+        if self._last_state is None:
+            raise RuntimeError(f"call reset(start_state) before {method}")
 
     def reset(self, state) -> None:
         """Start a trial at ``state``: no evidence, costs measured from here."""
         state = np.asarray(state, dtype=float)
+        if not np.isfinite(state).all():
+            raise ValueError(f"start state must be finite, got {state!r}")
         self._steps = 0
         self._last_state = state
         self._prefix = np.zeros(len(self.intents))
@@ -172,6 +218,7 @@ class Assistant:
 
     def update(self, state) -> Inference:
         """Observe the state reached one inference step (``dt``) after the last one."""
+        self._require_reset("update")
         state = np.asarray(state, dtype=float)
         if not np.isfinite(state).all():
             raise ValueError(f"state must be finite, got {state!r}")
@@ -193,16 +240,18 @@ class Assistant:
             at_observed, to_go = self._costs_to_go([observed, state], time_left).T
             self._prefix += at_observed - to_go
         # The equations' unchecked cores: costs are finite and t, k, lam were checked once.
-        subopt = self.subopt_scale * np.maximum(self._prefix + to_go - self._optimal, 0.0)
+        subopt = self.subopt_scale * _suboptimality(self._prefix, to_go, self._optimal)
         betas = _beta_hat(subopt, t, self.k, self.lam)
         inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
         belief = _posterior(_log_likelihood(subopt, inference_beta, t, self.k))
         star = int(np.argmax(belief))
         n = len(self.intents)
         alphas = {
-            "confidence": _alpha_confidence(float(betas[star])),
-            "distance": _alpha_distance(self.intents[star].distance(state), self.pba_distance),
-            "belief": _alpha_belief(float(belief[star]), n) if n > 1 else 0.0,
+            "confidence": float(_alpha_confidence(float(betas[star]))),
+            "distance": float(
+                _alpha_distance(self.intents[star].distance(state), self.pba_distance)
+            ),
+            "belief": float(_alpha_belief(float(belief[star]), n)) if n > 1 else 0.0,
         }
         alpha = 1.0 if self.arbitration == "none" else alphas[self.arbitration]
         if star != self._plan_intent:
@@ -234,6 +283,7 @@ class Assistant:
 
     def robot_action(self, state, elapsed_in_step: float = 0.0) -> np.ndarray:
         """u*: velocity toward the cached plan's next state, within the speed limits."""
+        self._require_reset("robot_action")
         state = np.asarray(state, dtype=float)
         if self._plan is None:
             return np.zeros_like(state)
@@ -252,6 +302,7 @@ class Assistant:
 
         Before the first inference step the user has full control.
         """
+        self._require_reset("act")
         user_action = np.asarray(user_action, dtype=float)
         if self.latest is None:
             return user_action.copy()

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casa_core._checks import as_finite_or_inf, scalar_or_array
+from casa_core._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
 def suboptimality(prefix_cost, cost_to_go, optimal_cost):
@@ -36,7 +36,7 @@ def suboptimality(prefix_cost, cost_to_go, optimal_cost):
     float or ndarray
         ``prefix_cost + cost_to_go - optimal_cost``, clamped at 0: a numerical
         planner can return a start cost above the true optimum, and an observed
-        trajectory can never beat the optimum (NOTES section 2).
+        trajectory can never beat the optimum (see docs/departures.md).
 
     Examples
     --------
@@ -50,10 +50,15 @@ def suboptimality(prefix_cost, cost_to_go, optimal_cost):
     optimal = as_finite_or_inf("optimal_cost", optimal_cost)
     with np.errstate(invalid="raise"):
         try:
-            subopt = prefix + to_go - optimal
+            subopt = _suboptimality(prefix, to_go, optimal)
         except FloatingPointError as exc:
             raise ValueError("suboptimality of infinite costs is undefined (inf - inf)") from exc
-    return scalar_or_array(np.maximum(subopt, 0.0))
+    return scalar_or_array(subopt)
+
+
+def _suboptimality(prefix, to_go, optimal) -> np.ndarray:
+    """:func:`suboptimality` on checked input (the assistant's per-step path)."""
+    return np.maximum(prefix + to_go - optimal, 0.0)
 
 
 def beta_hat(subopt, t, k, lam=0.0):
@@ -93,8 +98,7 @@ def beta_hat(subopt, t, k, lam=0.0):
     subopt = as_finite_or_inf("subopt", subopt, nonnegative=True)
     t = as_finite_or_inf("t", t, nonnegative=True)
     lam = as_finite_or_inf("lam", lam, nonnegative=True)
-    if not np.isfinite(k) or k <= 0:
-        raise ValueError(f"k (action dimensionality) must be a positive number, got {k!r}")
+    require_positive(k=k)
     beta = _beta_hat(subopt, t, k, lam)
     # inf / inf (infinite t with infinite suboptimality) has no meaning here.
     if np.isnan(beta).any():
@@ -103,7 +107,7 @@ def beta_hat(subopt, t, k, lam=0.0):
 
 
 def _beta_hat(subopt: np.ndarray, t, k, lam) -> np.ndarray:
-    """eq. beta_map on checked input (the assistant's per-step path)."""
+    """:func:`beta_hat` on checked input (the assistant's per-step path)."""
     evidence = t * k
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(evidence == 0, 0.0, evidence / (2.0 * (lam + subopt)))

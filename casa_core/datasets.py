@@ -1,8 +1,8 @@
 """One raw dataset folder in, its processed tables out.
 
 A dataset is a folder of casa-trial/1 logs (``data/raw/<dataset>/``, read only
-through :mod:`casa_core.logs`). It becomes four tables, the contract with users
-(issue 8):
+through :mod:`casa_core.io`). It becomes four tables, the contract with users
+(``docs/data-contracts.md``):
 
 - ``trials.csv``: one row per trial with its metrics (:mod:`casa_core.metrics`),
   columns :data:`TRIAL_COLUMNS`;
@@ -13,7 +13,7 @@ through :mod:`casa_core.logs`). It becomes four tables, the contract with users
   columns :data:`VALIDATION_COLUMNS`.
 
 Rows are sorted on their identifying columns and written with
-:func:`casa_core.logs.frame_to_csv_text`, atomically, so the same raw files give
+:func:`casa_core.io.atomic.write_csv`, atomically, so the same raw files give
 the same bytes. Paths in the tables are relative to the dataset folder.
 """
 
@@ -24,7 +24,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from casa_core import logs, metrics, tasks
+from casa_core import metrics, tasks
+from casa_core.io import CONDITION_KEYS, FileCheck, Problem, check_paths
+from casa_core.io.atomic import write_csv
+from casa_core.io.contract import INTENT_PREFIXES
+from casa_core.scene import Scene
 
 TRIAL_COLUMNS = (
     "dataset",
@@ -71,13 +75,12 @@ LIKERT_COLUMNS = (
     "source",
 )
 VALIDATION_COLUMNS = ("file", "kind", "status", "rule", "where", "message")
-CONDITION = ["participant", "task", "method", "phase"]
 
 
 class DatasetInvalid(ValueError):
     """A dataset has bad files; ``problems`` lists every problem in all of them."""
 
-    def __init__(self, dataset: str, problems: list[logs.Problem]):
+    def __init__(self, dataset: str, problems: list[Problem]):
         self.dataset = dataset
         self.problems = problems
         lines = "\n".join(f"  {p}" for p in problems)
@@ -106,7 +109,7 @@ def _relative(path: Path, root: Path) -> str:
 
 
 def validation_table(
-    checks: list[logs.FileCheck], root: Path, allow_invalid: bool = False
+    checks: list[FileCheck], root: Path, *, allow_invalid: bool = False
 ) -> pd.DataFrame:
     """Every checked file with its status: ``ok``, ``ignored`` (not a log), ``invalid``
     (stops the build) or ``excluded`` (with ``allow_invalid``); one row per problem.
@@ -129,14 +132,14 @@ def validation_table(
     return pd.DataFrame(rows, columns=list(VALIDATION_COLUMNS))
 
 
-def check_dataset(raw_dir: Path | str) -> list[logs.FileCheck]:
-    """Check every file of a dataset folder (see :func:`casa_core.logs.check_paths`)."""
-    return logs.check_paths([Path(raw_dir)])
+def check_dataset(raw_dir: Path | str) -> list[FileCheck]:
+    """Check every file of a dataset folder (see :func:`casa_core.io.check_paths`)."""
+    return check_paths([Path(raw_dir)])
 
 
 def build_tables(
     raw_dir: Path | str,
-    scene: dict,
+    scene: Scene,
     *,
     dataset: str | None = None,
     allow_invalid: bool = False,
@@ -147,8 +150,8 @@ def build_tables(
     ----------
     raw_dir : path
         The dataset's folder; only read.
-    scene : dict
-        The scene layout (``config/scene.yaml``): the tasks' intended
+    scene : Scene
+        The study's scene (:func:`casa_core.scene.load_scene`): the tasks' intended
         trajectories and the control tick ``teleop.dt``.
     dataset : str, optional
         The dataset's name in the tables; the folder's name by default.
@@ -169,28 +172,30 @@ def build_tables(
     good = [check for check in checks if check.ok]
     trials, steps = _trials_and_steps([c for c in good if c.kind == "trial"], root, scene, dataset)
     likert = _likert([c for c in good if c.kind == "surveys"], trials, dataset)
-    return DatasetTables(trials, steps, likert, validation_table(checks, root, allow_invalid))
+    return DatasetTables(
+        trials, steps, likert, validation_table(checks, root, allow_invalid=allow_invalid)
+    )
 
 
 def _trials_and_steps(
-    checks: list[logs.FileCheck], root: Path, scene: dict, dataset: str
+    checks: list[FileCheck], root: Path, scene: Scene, dataset: str
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    dt = float(scene["teleop"]["dt"])
+    dt = scene.teleop.dt
     intended = {}
     rows, step_parts = [], []
     for check in checks:
-        meta, frame = check.meta, check.frame  # parsed and checked by logs.check_paths
+        meta, frame = check.meta, check.frame  # parsed and checked by check_paths
         task = meta["task"]
         if task not in intended:
             intended[task] = tasks.intended_trajectory(task, scene)
         trial = _relative(check.file, root).removesuffix(".csv")
-        condition = {key: meta[key] for key in CONDITION}
+        condition = {key: meta[key] for key in CONDITION_KEYS}
         rows.append(
             {
                 "dataset": dataset,
                 **condition,
                 "source": meta["source"],
-                **metrics.trial_metrics(frame, intended[task], dt),
+                **metrics.trial_metrics(frame, intended[task], dt=dt),
                 "trial": trial,
             }
         )
@@ -199,10 +204,10 @@ def _trials_and_steps(
     trials["relative_effort"] = metrics.relative_effort(trials, "effort")
     trials["relative_effort_ticks"] = metrics.relative_effort(trials, "effort_ticks")
     trials = trials.astype({"effort": int, "effort_ticks": int, "ticks": int})
-    trials = trials[list(TRIAL_COLUMNS)].sort_values(CONDITION + ["trial"], kind="stable")
+    trials = trials[list(TRIAL_COLUMNS)].sort_values([*CONDITION_KEYS, "trial"], kind="stable")
     steps = [part for part in step_parts if len(part)]
     steps = pd.concat(steps) if steps else pd.DataFrame(columns=list(STEP_COLUMNS))
-    steps = steps[list(STEP_COLUMNS)].sort_values(CONDITION + ["trial", "t", "intent"])
+    steps = steps[list(STEP_COLUMNS)].sort_values([*CONDITION_KEYS, "trial", "t", "intent"])
     return trials.reset_index(drop=True), steps.reset_index(drop=True)
 
 
@@ -211,7 +216,7 @@ def _steps(frame: pd.DataFrame, condition: dict, dataset: str, trial: str) -> pd
     names = []
     for column in frame.columns:
         prefix, _, name = column.partition(":")
-        if prefix in ("beta", "belief") and name not in names:
+        if prefix in INTENT_PREFIXES and name not in names:
             names.append(name)
     if not names and "alpha" not in frame.columns:
         return pd.DataFrame(columns=list(STEP_COLUMNS))
@@ -219,7 +224,7 @@ def _steps(frame: pd.DataFrame, condition: dict, dataset: str, trial: str) -> pd
     parts = []
     for name in names or [""]:
         part = pd.DataFrame({"t": frame["t"], "alpha": alpha, "intent": name})
-        for quantity in ("beta", "belief"):
+        for quantity in INTENT_PREFIXES:
             column = f"{quantity}:{name}"
             part[quantity] = frame[column] if column in frame.columns else float("nan")
         parts.append(part)
@@ -229,7 +234,7 @@ def _steps(frame: pd.DataFrame, condition: dict, dataset: str, trial: str) -> pd
     return steps
 
 
-def _likert(checks: list[logs.FileCheck], trials: pd.DataFrame, dataset: str) -> pd.DataFrame:
+def _likert(checks: list[FileCheck], trials: pd.DataFrame, dataset: str) -> pd.DataFrame:
     """All survey answers; without a ``source`` column, the participant's trials' source."""
     sources = trials.groupby("participant")["source"].agg(
         lambda s: s.iloc[0] if s.nunique() == 1 else "unknown"
@@ -244,7 +249,7 @@ def _likert(checks: list[logs.FileCheck], trials: pd.DataFrame, dataset: str) ->
     if not parts:
         return pd.DataFrame(columns=list(LIKERT_COLUMNS))
     likert = pd.concat(parts, ignore_index=True)[list(LIKERT_COLUMNS)]
-    return likert.sort_values(CONDITION + ["question"], kind="stable").reset_index(drop=True)
+    return likert.sort_values([*CONDITION_KEYS, "question"], kind="stable").reset_index(drop=True)
 
 
 def read_table(path: Path | str) -> pd.DataFrame:
@@ -253,6 +258,22 @@ def read_table(path: Path | str) -> pd.DataFrame:
     pandas' defaults would read the method ``"NA"`` as missing and a participant
     ``"007"`` as the number 7; here only empty cells are missing and identifying
     columns stay text.
+
+    Parameters
+    ----------
+    path : path or file-like
+        A CSV written by :func:`write_tables` or :func:`write_validation`.
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Examples
+    --------
+    >>> import io
+    >>> table = read_table(io.StringIO("participant,method,score\\n007,NA,5\\n008,,\\n"))
+    >>> table["participant"].tolist(), table["method"].tolist()
+    (['007', '008'], ['NA', nan])
     """
     text_columns = {c: str for c in ("dataset", "participant", "trial", "intent", "file")}
     return pd.read_csv(path, dtype=text_columns, keep_default_na=False, na_values=[""])
@@ -263,16 +284,14 @@ def write_tables(tables: DatasetTables, out_dir: Path | str) -> list[Path]:
     out_dir = Path(out_dir)
     written = []
     for name in ("trials", "steps", "likert"):
-        path = out_dir / f"{name}.csv"
-        logs.atomic_write_text(path, logs.frame_to_csv_text(getattr(tables, name)))
-        written.append(path)
+        written.append(write_csv(out_dir / f"{name}.csv", getattr(tables, name)))
     return written
 
 
 def process_dataset(
     raw_dir: Path | str,
     out_dir: Path | str,
-    scene: dict,
+    scene: Scene,
     *,
     dataset: str | None = None,
     allow_invalid: bool = False,
@@ -285,7 +304,7 @@ def process_dataset(
 
 def write_validation(
     paths: list[Path | str], out_csv: Path | str, *, allow_invalid: bool = False
-) -> list[logs.FileCheck]:
+) -> list[FileCheck]:
     """Check files and folders, write their validation table atomically, return the checks.
 
     Paths in the table are relative to the folder given when exactly one folder
@@ -293,7 +312,6 @@ def write_validation(
     """
     paths = [Path(p) for p in paths]
     root = paths[0] if len(paths) == 1 and paths[0].is_dir() else Path(".")
-    checks = logs.check_paths(paths)
-    table = validation_table(checks, root, allow_invalid)
-    logs.atomic_write_text(Path(out_csv), logs.frame_to_csv_text(table))
+    checks = check_paths(paths)
+    write_csv(out_csv, validation_table(checks, root, allow_invalid=allow_invalid))
     return checks

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casa_core._checks import as_finite_or_inf, scalar_or_array
+from casa_core._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
 def log_likelihood(subopt, beta, t, k):
@@ -46,8 +46,7 @@ def log_likelihood(subopt, beta, t, k):
     subopt = as_finite_or_inf("subopt", subopt, nonnegative=True)
     beta = as_finite_or_inf("beta", beta, nonnegative=True)
     t = as_finite_or_inf("t", t, nonnegative=True)
-    if not np.isfinite(k) or k <= 0:
-        raise ValueError(f"k (action dimensionality) must be a positive number, got {k!r}")
+    require_positive(k=k)
     return scalar_or_array(_log_likelihood(subopt, beta, t, k))
 
 

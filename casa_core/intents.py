@@ -15,7 +15,16 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from casa_core._checks import require_positive
+
 COST_FORMS = ("path_length", "distance_sum")
+# Defaults written once (the assistant uses the same; see docs/departures.md).
+#: Seconds between trajectory states: the original implementation's waypoint step.
+DT = 0.5
+#: Fastest end-effector speed of an optimal trajectory, m/s: the keyboard's speed.
+SPEED = 0.05
+#: Cost per metre of end-effector path: the original implementation's 50 / 0.22, rounded.
+COST_PER_METRE = 227.0
 
 
 class Intent(ABC):
@@ -33,7 +42,14 @@ class Intent(ABC):
         """Cost of one step; the cost of a prefix is the sum of its steps."""
 
     def prefix_cost(self, states: np.ndarray) -> float:
-        """C(xi_{0->t}) of the observed states ``(n, 4)``, the first being the start."""
+        """C(xi_{0->t}) of the observed states ``(n, 4)``, the first being the start.
+
+        Examples
+        --------
+        >>> green = GoalIntent("green", [0.3, 0.4, 0.0], scale=1.0)
+        >>> green.prefix_cost([[0, 0, 0, 0], [0.3, 0, 0, 0], [0.3, 0.4, 0, 0]])  # 0.3 + 0.4
+        0.7
+        """
         states = np.asarray(states, dtype=float)
         pairs = zip(states[:-1], states[1:], strict=True)
         return float(sum(self.step_cost(a, b) for a, b in pairs))
@@ -43,7 +59,14 @@ class Intent(ABC):
         """C(xi*_{t->T}): the optimal cost from ``state`` with ``time_left`` seconds left."""
 
     def costs_to_go(self, states, time_left: float) -> np.ndarray:
-        """:meth:`cost_to_go` of several states with the same time left (planners batch them)."""
+        """:meth:`cost_to_go` of several states with the same time left (planners batch them).
+
+        Examples
+        --------
+        >>> green = GoalIntent("green", [0.3, 0.4, 0.0], scale=1.0)
+        >>> green.costs_to_go([[0, 0, 0, 0], [0.3, 0.4, 0, 0]], 15.0)
+        array([0.5, 0. ])
+        """
         return np.array([self.cost_to_go(state, time_left) for state in states])
 
     @abstractmethod
@@ -60,7 +83,7 @@ class GoalIntent(Intent):
 
     Two cost forms, chosen with ``cost``:
 
-    ``"path_length"`` (the original implementation's, NOTES section 1)
+    ``"path_length"`` (the original implementation's; see docs/departures.md)
         C(xi) = scale * (sum of ||x_{i+1} - x_i||) + final_weight * ||x_N - g||:
         the end-effector path length plus a penalty on the distance left at the
         horizon. The optimum drives straight at ``speed``; its cost-to-go from
@@ -81,27 +104,41 @@ class GoalIntent(Intent):
         Intent name (e.g. ``"green"``).
     goal : array_like, shape (3,)
         Goal position in the robot base frame, metres.
-    cost : {"path_length", "distance_sum"}
-    speed : float
+    cost : {"path_length", "distance_sum"}, default "path_length"
+    speed : float, default SPEED
         Fastest end-effector speed the optimum may use, m/s (the keyboard's 0.05).
-    dt : float
+    dt : float, default DT
         Seconds between trajectory states (0.5 in the original).
-    scale : float
+    scale : float, default COST_PER_METRE
         Cost per metre (path_length; the original's ~227) or per metre-second
         (distance_sum).
     final_weight : float, optional
         Cost per metre left at the horizon (path_length); default ``2 * scale``
         (our choice: the original's value is not known).
+
+    Examples
+    --------
+    >>> green = GoalIntent("green", [0.3, 0.4, 0.0])  # 0.5 m from the origin
+    >>> green
+    GoalIntent('green', goal=[0.3, 0.4, 0.0], cost='path_length')
+    >>> start = np.zeros(4)
+    >>> green.distance(start)
+    0.5
+    >>> green.optimal_trajectory(start, 1.0)[:, :2]  # 0.025 m per 0.5 s step toward the goal
+    array([[0.   , 0.   ],
+           [0.015, 0.02 ],
+           [0.03 , 0.04 ]])
     """
 
     def __init__(
         self,
         name: str,
         goal,
+        *,
         cost: str = "path_length",
-        speed: float = 0.05,
-        dt: float = 0.5,
-        scale: float = 227.0,
+        speed: float = SPEED,
+        dt: float = DT,
+        scale: float = COST_PER_METRE,
         final_weight: float | None = None,
     ):
         if cost not in COST_FORMS:
@@ -109,9 +146,7 @@ class GoalIntent(Intent):
         goal = np.asarray(goal, dtype=float)
         if goal.shape != (3,) or not np.isfinite(goal).all():
             raise ValueError(f"goal of intent {name!r} must be 3 finite numbers, got {goal!r}")
-        for key, value in (("speed", speed), ("dt", dt), ("scale", scale)):
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{key} of intent {name!r} must be positive, got {value!r}")
+        require_positive(f"intent {name!r}", speed=speed, dt=dt, scale=scale)
         self.name = name
         self.goal = goal
         self.cost = cost
@@ -124,11 +159,28 @@ class GoalIntent(Intent):
         return f"GoalIntent({self.name!r}, goal={self.goal.tolist()}, cost={self.cost!r})"
 
     def step_cost(self, state_from, state_to) -> float:
+        """Cost of the step ``state_from -> state_to`` (path length, or distance left x dt).
+
+        Examples
+        --------
+        >>> GoalIntent("green", [0.3, 0.4, 0.0], scale=1.0).step_cost(np.zeros(4), np.ones(4))
+        1.7320508075688772
+        """
         if self.cost == "path_length":
             return self.scale * float(np.linalg.norm(state_to[:3] - state_from[:3]))
         return self.scale * self.dt * float(np.linalg.norm(state_to[:3] - self.goal))
 
     def cost_to_go(self, state, time_left: float) -> float:
+        """C(xi*_{t->T}) in closed form (see the class docstring for both cost forms).
+
+        Examples
+        --------
+        >>> green = GoalIntent("green", [0.3, 0.4, 0.0], scale=1.0, final_weight=2.0)
+        >>> green.cost_to_go(np.zeros(4), 15.0)  # 0.5 m reachable in 10 s: the path length
+        0.5
+        >>> round(green.cost_to_go(np.zeros(4), 4.0), 12)  # 0.2 m in 4 s, 0.3 m left x 2
+        0.8
+        """
         d = float(np.linalg.norm(np.asarray(state[:3], dtype=float) - self.goal))
         time_left = max(float(time_left), 0.0)
         if self.cost == "path_length":
@@ -140,6 +192,7 @@ class GoalIntent(Intent):
         return self.scale * self.dt * (m * d - step * m * (m + 1) / 2.0)
 
     def optimal_trajectory(self, state, time_left: float) -> np.ndarray:
+        """The straight line to the goal at ``speed``, then waiting there; rotation held."""
         state = np.asarray(state, dtype=float)
         n = int(np.floor(max(float(time_left), 0.0) / self.dt + 1e-9))
         offset = self.goal - state[:3]
@@ -150,4 +203,5 @@ class GoalIntent(Intent):
         return np.column_stack([positions, np.full(n + 1, state[3])])
 
     def distance(self, state) -> float:
+        """Euclidean distance (m) from the end effector to the goal."""
         return float(np.linalg.norm(np.asarray(state[:3], dtype=float) - self.goal))

@@ -1,4 +1,4 @@
-"""The intent library: one versioned file per learned intent (issue 5, item 4).
+"""The intent library: one versioned file per learned intent (format ``casa-intent``).
 
 Lifelong learning keeps what it learned: each learned intent is one file
 ``<name>.intent.json`` in a library folder, holding the cost network's weights
@@ -11,11 +11,31 @@ The weights are stored per parameter as shape, dtype and base64 of the
 little-endian bytes, so the file is plain text and self-describing. The key
 ``checksum`` is the SHA-256 of the canonical JSON (sorted keys, no spaces) of
 every other key: a truncated, edited or bit-flipped file is detected. Files are
-written atomically (a temporary file in the same folder, then a rename).
+written atomically (:mod:`casa_core.io.atomic`). The format is described for readers
+in docs/data-contracts.md.
 
 Reading a library never fails as a whole: :func:`scan_library` returns the good
 entries and, separately, one :class:`LibraryError` per bad file, naming the file
 and the rule it breaks.
+
+Examples
+--------
+>>> import tempfile
+>>> from casa_core.learning import IRLConfig, NeuralIntent, cost_network
+>>> network = cost_network(16, hidden=8, negative_slope=0.01, seed=0)
+>>> intent = NeuralIntent(
+...     "red_p01", network, objects={"red": (0.4, 0.22, 0.12)}, cost_scale=1.0, length_scale=0.1
+... )
+>>> folder = tempfile.mkdtemp()
+>>> path = save_intent(
+...     folder, intent, task="unknown_goal", participant="p01", seed=0, demos=[], history=[],
+...     config=IRLConfig(hidden=8),
+... )
+>>> path.name
+'red_p01.intent.json'
+>>> entries, problems = scan_library(folder)
+>>> entries[0].intent, problems
+(NeuralIntent('red_p01', objects=['red']), [])
 """
 
 from __future__ import annotations
@@ -23,16 +43,15 @@ from __future__ import annotations
 import base64
 import hashlib
 import json
-import os
 import re
-import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from casa_core.irl import IRLConfig, NeuralIntent, cost_network, feature_names
+from casa_core.io.atomic import atomic_write_text
+from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
 from casa_core.planning import PlannerConfig
 
 FORMAT = "casa-intent"
@@ -154,7 +173,7 @@ def save_intent(
     library : path
         The library folder (created if missing).
     intent : NeuralIntent
-        The learned intent (:func:`casa_core.irl.learn_intent`).
+        The learned intent (``MaxEntIRL.intent_``, :class:`casa_core.learning.MaxEntIRL`).
     task, participant : str
         Where the demonstrations came from (free text; "" if unknown).
     seed : int
@@ -162,7 +181,7 @@ def save_intent(
     demos : list of array_like
         The demonstrations ``(n, 5)``; only their hashes are stored.
     history : list of dict
-        The training history returned by ``learn_intent``.
+        The training history (``MaxEntIRL.history_``).
     config : IRLConfig
         The settings it was learned with.
 
@@ -201,16 +220,7 @@ def save_intent(
     }
     payload["checksum"] = hashlib.sha256(_canonical(payload)).hexdigest()
     text = json.dumps(payload, indent=1, sort_keys=True, allow_nan=False) + "\n"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return atomic_write_text(path, text)
 
 
 def _require(path: Path, ok: bool, rule: str, message: str) -> None:
@@ -294,13 +304,17 @@ def load_intent(path: Path | str) -> LibraryEntry:
 
 def _build_intent(payload: dict) -> NeuralIntent:
     object_names = [obj["name"] for obj in payload["objects"]]
-    positions = [obj["position"] for obj in payload["objects"]]
+    if len(set(object_names)) != len(object_names):
+        raise ValueError(f"objects {object_names} repeat a name")
+    objects = {obj["name"]: obj["position"] for obj in payload["objects"]}
     if payload["features"] != feature_names(object_names):
         raise ValueError("features do not match the objects (an incompatible feature set)")
     spec = payload["network"]
     if spec["inputs"] != len(payload["features"]):
         raise ValueError(f"network has {spec['inputs']} inputs for {len(payload['features'])}")
-    network = cost_network(spec["inputs"], spec["hidden"], spec["negative_slope"], seed=0)
+    network = cost_network(
+        spec["inputs"], hidden=spec["hidden"], negative_slope=spec["negative_slope"], seed=0
+    )
     expected = network.state_dict()
     stored = payload["weights"]
     if set(stored) != set(expected):
@@ -321,11 +335,10 @@ def _build_intent(payload: dict) -> NeuralIntent:
     return NeuralIntent(
         payload["name"],
         network,
-        object_names,
-        positions,
-        payload["cost_scale"],
-        payload["length_scale"],
-        PlannerConfig(**payload["planner"]),
+        objects=objects,
+        cost_scale=payload["cost_scale"],
+        length_scale=payload["length_scale"],
+        planner=PlannerConfig(**payload["planner"]),
         guides=[np.asarray(g, dtype=float) for g in payload["guides"]],
         cost_offset=payload["cost_offset"],
     )
@@ -356,100 +369,3 @@ def scan_library(library: Path | str) -> tuple[list[LibraryEntry], list[LibraryE
         names[name] = path
         entries.append(entry)
     return entries, problems
-
-
-def read_demonstrations(
-    folder: Path | str, task: str | None = None, phase: str | None = "demonstration"
-) -> tuple[list, list[dict]]:
-    """The demonstrations in ``folder`` (the casa-trial/1 logs below it, sorted).
-
-    Logs are read with :func:`casa_core.logs.read_trial` (which validates them);
-    with ``task``, only that task's trials are kept; with ``phase`` (by default
-    ``"demonstration"``), only the trials of that phase, so that a participant's
-    folder can be given whole: its assisted trials, where the robot pulled the
-    arm toward another intent, are not demonstrations. ``phase=None`` keeps
-    every phase.
-
-    Returns
-    -------
-    demos : list of numpy.ndarray
-        Each ``(n, 5)`` of ``[t, x, y, z, rot]``.
-    metas : list of dict
-        Their metadata, in the same order.
-
-    Raises
-    ------
-    ValueError
-        If the folder has no trial (of that task and phase); :class:`casa_core.logs.LogError`
-        if a log breaks the contract.
-    """
-    from casa_core import logs
-
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise ValueError(f"{folder}: demonstrations folder not found")
-    stems = [p.with_suffix("") for p in logs.find_files(folder) if p.suffix == ".json"]
-    demos, metas, skipped = [], [], set()
-    for stem in stems:
-        meta, frame = logs.read_trial(stem)
-        if task is not None and meta["task"] != task:
-            continue
-        if phase is not None and meta["phase"] != phase:
-            skipped.add(meta["phase"])
-            continue
-        demos.append(frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float))
-        metas.append(meta)
-    if not demos:
-        which = f" of task {task!r}" if task else ""
-        which += f" in phase {phase!r}" if phase else ""
-        found = f" (found phases: {', '.join(sorted(skipped))})" if skipped else ""
-        raise ValueError(
-            f"{folder}: no trial log{which} found (casa-trial/1 .json + .csv pairs){found}"
-        )
-    return demos, metas
-
-
-def learn_to_library(
-    demos_folder: Path | str,
-    name: str,
-    library: Path | str,
-    scene: dict,
-    seed: int = 0,
-    task: str | None = None,
-    participant: str | None = None,
-    config: IRLConfig | None = None,
-    phase: str | None = "demonstration",
-) -> tuple[Path, list[dict], float]:
-    """Learn intent ``name`` from the logs in ``demos_folder`` and save it in ``library``.
-
-    ``task`` and ``phase`` filter the logs (:func:`read_demonstrations`); task
-    and participant stored default to those of the logs when they all agree
-    (else ""). Returns the file, the training
-    history and the training time in seconds.
-    """
-    import time
-
-    from casa_core.irl import learn_intent
-
-    config = IRLConfig() if config is None else config
-    intent_path(library, name)  # a bad name fails before training
-    demos, metas = read_demonstrations(demos_folder, task, phase)
-
-    def agreed(key: str) -> str:
-        values = {str(m.get(key, "")) for m in metas}
-        return values.pop() if len(values) == 1 else ""
-
-    began = time.perf_counter()
-    intent, history = learn_intent(demos, scene, name, seed, config)
-    seconds = time.perf_counter() - began
-    path = save_intent(
-        library,
-        intent,
-        task=agreed("task") if task is None else task,
-        participant=agreed("participant") if participant is None else participant,
-        seed=seed,
-        demos=demos,
-        history=history,
-        config=config,
-    )
-    return path, history, seconds

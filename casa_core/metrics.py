@@ -29,6 +29,14 @@ For a trial logged at ticks ``t_0 < ... < t_{n-1}`` with end-effector positions
 
 Both error sums and the efficiency cost grow with the number of ticks, as the
 paper's sums do; compare them only across trials logged at the same tick rate.
+
+Examples
+--------
+>>> executed = np.array([[0.0, 0, 0, 0, 0], [1.0, 0.1, 0, 0, 0]])
+>>> efficiency_cost(executed[:, 0], executed[:, 1:4])
+0.010000000000000002
+>>> key_presses(["x+", "x+", "", "x+ y+"]), key_ticks(["x+", "x+", "", "x+ y+"])
+(3, 4)
 """
 
 from __future__ import annotations
@@ -38,13 +46,20 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-REFERENCE_METHOD = "NA"
-# Phases whose NA trial is the reference of relative effort: the NA *condition*,
-# not the demonstrations (also driven with NA) nor the familiarization.
-REFERENCE_PHASES = ("no_misspecification", "before_learning")
+from casa_core.vocabulary import PHASES, condition_of
+
+#: The condition whose effort is the reference of relative effort, and its method.
+REFERENCE_CONDITION = REFERENCE_METHOD = "NA"
+#: The phases whose NA trials are the NA *condition* (:func:`casa_core.vocabulary.condition_of`):
+#: not the demonstrations (also driven with NA), nor the familiarization, nor after learning.
+REFERENCE_PHASES = tuple(
+    phase for phase in PHASES if condition_of(REFERENCE_METHOD, phase) == REFERENCE_CONDITION
+)
 
 
-def trajectory_error(executed: np.ndarray, intended: np.ndarray, dt: float) -> tuple[float, float]:
+def trajectory_error(
+    executed: np.ndarray, intended: np.ndarray, *, dt: float
+) -> tuple[float, float]:
     """Position and rotation error between two trajectories aligned in time.
 
     Parameters
@@ -60,6 +75,21 @@ def trajectory_error(executed: np.ndarray, intended: np.ndarray, dt: float) -> t
         ``sum_j ||p(s_j) - p*(s_j)||^2`` in m^2 over ``s_j = j dt`` (module docstring).
     error_rot : float
         ``sum_j (r(s_j) - r*(s_j))^2`` in rad^2.
+
+    Raises
+    ------
+    ValueError
+        If ``dt`` is not positive.
+
+    Examples
+    --------
+    Standing still at the start for 1 s while the reference moves 0.05 m along x:
+
+    >>> intended = np.array([[0.0, 0, 0, 0, 0], [1.0, 0.05, 0, 0, 0.1]])
+    >>> executed = np.array([[0.0, 0, 0, 0, 0], [1.0, 0, 0, 0, 0]])
+    >>> error, error_rot = trajectory_error(executed, intended, dt=0.5)
+    >>> round(error, 8), round(error_rot, 8)
+    (0.003125, 0.0125)
     """
     executed = np.asarray(executed, dtype=float)
     intended = np.asarray(intended, dtype=float)
@@ -87,6 +117,19 @@ def efficiency_cost(t: np.ndarray, values: np.ndarray) -> float:
         Strictly increasing times (s).
     values : ndarray, shape (n,) or (n, d)
         Positions (m) or angles (rad) at those times.
+
+    Returns
+    -------
+    float
+        0 for fewer than two samples.
+
+    Examples
+    --------
+    0.1 m in 0.5 s (0.2 m/s), then 0.3 m in 1 s (0.3 m/s):
+
+    >>> t = np.array([0.0, 0.5, 1.5])
+    >>> round(efficiency_cost(t, [[0, 0, 0], [0.1, 0, 0], [0.1, 0.3, 0]]), 12)
+    0.13
     """
     t = np.asarray(t, dtype=float)
     values = np.asarray(values, dtype=float).reshape(len(t), -1)
@@ -97,12 +140,26 @@ def efficiency_cost(t: np.ndarray, values: np.ndarray) -> float:
 
 
 def held_keys(keys: Sequence[str]) -> list[frozenset[str]]:
-    """The set of keys held at each tick, from the log's space-separated ``keys`` cells."""
+    """The set of keys held at each tick, from the log's space-separated ``keys`` cells.
+
+    Examples
+    --------
+    >>> [sorted(held) for held in held_keys(["x+ rot-", ""])]
+    [['rot-', 'x+'], []]
+    """
     return [frozenset(cell.split()) for cell in keys]
 
 
 def key_presses(keys: Sequence[str]) -> int:
-    """Number of press events: a key not held at the previous tick and held at this one."""
+    """Number of press events: a key not held at the previous tick and held at this one.
+
+    Keys held at the first tick are pressed then; holding a key is one press.
+
+    Examples
+    --------
+    >>> key_presses(["", "x+", "x+", "", "x+ y+", "y+"])
+    3
+    """
     previous: frozenset[str] = frozenset()
     presses = 0
     for held in held_keys(keys):
@@ -112,17 +169,23 @@ def key_presses(keys: Sequence[str]) -> int:
 
 
 def key_ticks(keys: Sequence[str]) -> int:
-    """The original's effort counter: keys held summed over ticks."""
+    """The original implementation's effort counter: keys held, summed over ticks.
+
+    Examples
+    --------
+    >>> key_ticks(["", "x+", "x+", "", "x+ y+", "y+"])
+    5
+    """
     return sum(len(held) for held in held_keys(keys))
 
 
-def trial_metrics(frame: pd.DataFrame, intended: np.ndarray, dt: float) -> dict[str, float]:
+def trial_metrics(frame: pd.DataFrame, intended: np.ndarray, *, dt: float) -> dict[str, float]:
     """Every per-trial metric of one trial log (module docstring for the formulas).
 
     Parameters
     ----------
     frame : pandas.DataFrame
-        A trial as returned by :func:`casa_core.logs.read_trial`.
+        A trial as returned by :func:`casa_core.io.read_trial`.
     intended : ndarray, shape (m, 5)
         The task's intended trajectory ``[t, x, y, z, rot]``.
     dt : float
@@ -133,9 +196,17 @@ def trial_metrics(frame: pd.DataFrame, intended: np.ndarray, dt: float) -> dict[
     dict
         ``error, error_rot, efficiency, efficiency_rot, effort, effort_ticks,
         duration, ticks``.
+
+    Examples
+    --------
+    >>> frame = pd.DataFrame({"t": [0.0, 0.5, 1.0], "x": [0.0, 0.05, 0.1], "y": 0.0,
+    ...                       "z": 0.0, "rot": 0.0, "keys": ["x+", "x+", ""]})
+    >>> result = trial_metrics(frame, frame[["t", "x", "y", "z", "rot"]].to_numpy(), dt=0.5)
+    >>> result["error"], result["effort"], result["effort_ticks"], result["duration"]
+    (0.0, 1, 2, 1.0)
     """
     executed = frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float)
-    error, error_rot = trajectory_error(executed, intended, dt)
+    error, error_rot = trajectory_error(executed, intended, dt=dt)
     t = executed[:, 0]
     return {
         "error": error,
@@ -169,6 +240,16 @@ def relative_effort(trials: pd.DataFrame, column: str = "effort") -> pd.Series:
     ------
     ValueError
         If a participant has more than one NA reference trial for a task.
+
+    Examples
+    --------
+    >>> trials = pd.DataFrame({"participant": ["p1", "p1", "p1"],
+    ...                        "task": ["unknown_goal"] * 3,
+    ...                        "method": ["NA", "CASA", "NA"],
+    ...                        "phase": ["before_learning", "after_learning", "demonstration"],
+    ...                        "effort": [40, 10, 99]})
+    >>> relative_effort(trials).tolist()
+    [1.0, 0.25, 2.475]
     """
     is_reference = trials["method"].eq(REFERENCE_METHOD) & trials["phase"].isin(REFERENCE_PHASES)
     reference = trials.loc[is_reference, ["participant", "task", column]]

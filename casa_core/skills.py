@@ -5,14 +5,12 @@ be carried upright to the pouring target and tilted there. It is written as a
 differentiable per-state cost and planned with :mod:`casa_core.planning`.
 
 Orientation of the cup
-    The original's "cup upright" feature is ``1 - (x-axis of the last link .
-    world z)`` (NOTES section 1): 0 with the cup upright, 1 on its side, 2
-    upside down. The end effector's rotation is the arm's own
-    (:func:`casa_core.robot.kinematics.ee_rotation`): at rot = 0 the tool's x
-    axis (the cup's axis) points up and its z axis (the last joint's) is
-    horizontal; the rotate keys turn the tool about its z axis by rot, so
-    ``R(rot) = R0 @ Rz(rot)`` and the cup's tilt from upright is ``|rot|``
-    (wrapped to [0, pi]). Here it is written in torch, to be differentiable.
+    The cup's axis is the end effector's x axis
+    (:func:`casa_core.rotation.end_effector_rotation`): up at rot = 0; the rotate
+    keys turn the tool about its horizontal z axis, so the cup's tilt from upright
+    is ``|rot|`` (wrapped to [0, pi]). The original implementation's "cup upright"
+    feature is ``1 - (cup axis . world z)``: 0 with the cup upright, 1 on its side,
+    2 upside down (see docs/paper-to-code.md).
 """
 
 from __future__ import annotations
@@ -20,27 +18,10 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from casa_core._checks import require_positive
 from casa_core.planning import PlannedIntent, PlannerConfig
-from casa_core.robot.kinematics import EE_ROTATION_AT_ZERO
-
-#: R(0): columns are the tool's x (cup axis, up), y and z axes in the base frame.
-R0 = EE_ROTATION_AT_ZERO
-
-
-def end_effector_rotation(rot: torch.Tensor) -> torch.Tensor:
-    """Rotation matrices ``(..., 3, 3)`` of the end effector at angles ``rot`` ``(...)``.
-
-    ``R(rot) = R0 @ Rz(rot)`` (see the module docstring); differentiable in rot.
-    Written as ``cos(rot) A + sin(rot) B + C`` with constant matrices (the
-    columns of R0 turned by Rz), which is cheaper than building Rz per state.
-    """
-    r0 = torch.as_tensor(R0, dtype=rot.dtype)
-    zero = torch.zeros(3, dtype=rot.dtype)
-    # R0 @ Rz(rot): column x = c r0x + s r0y, column y = -s r0x + c r0y, column z = r0z.
-    a = torch.stack([r0[:, 0], r0[:, 1], zero], dim=-1)
-    b = torch.stack([r0[:, 1], -r0[:, 0], zero], dim=-1)
-    c = torch.stack([zero, zero, r0[:, 2]], dim=-1)
-    return torch.cos(rot)[..., None, None] * a + torch.sin(rot)[..., None, None] * b + c
+from casa_core.rotation import end_effector_rotation
+from casa_core.scene import Scene
 
 
 def cup_upright(rot: torch.Tensor) -> torch.Tensor:
@@ -72,7 +53,7 @@ class PouringIntent(PlannedIntent):
         g(d) = exp(-(d / radius)^2).
 
     ``|a - up|`` is ``sqrt(2 u)`` with u the original's cup-upright feature
-    ``1 - a . z`` (NOTES section 1); both chords grow linearly with the angle, so
+    ``1 - a . z``; both chords grow linearly with the angle, so
     that their gradients do not vanish at the upright cup (``u`` alone is flat
     there and a planner would never start tilting). Away from the target (beyond
     about ``radius``) the spill term outweighs the pour term and the cup stays
@@ -105,6 +86,7 @@ class PouringIntent(PlannedIntent):
         self,
         name: str,
         target,
+        *,
         tilt: float,
         scale: float = 227.0,
         pour_weight: float = 0.1,
@@ -116,15 +98,13 @@ class PouringIntent(PlannedIntent):
         target = np.asarray(target, dtype=float)
         if target.shape != (3,) or not np.isfinite(target).all():
             raise ValueError(f"target of intent {name!r} must be 3 finite numbers, got {target!r}")
-        weights = (
-            ("scale", scale),
-            ("pour_weight", pour_weight),
-            ("spill_weight", spill_weight),
-            ("radius", radius),
+        require_positive(
+            f"intent {name!r}",
+            scale=scale,
+            pour_weight=pour_weight,
+            spill_weight=spill_weight,
+            radius=radius,
         )
-        for key, value in weights:
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{key} of intent {name!r} must be positive, got {value!r}")
         if not np.isfinite(tilt):
             raise ValueError(f"tilt of intent {name!r} must be finite, got {tilt!r}")
         self.target = target
@@ -138,13 +118,16 @@ class PouringIntent(PlannedIntent):
         self._up = torch.tensor([0.0, 0.0, 1.0], dtype=torch.float64)
 
     @classmethod
-    def from_scene(cls, scene: dict, name: str = "pour", **kwargs) -> PouringIntent:
-        """The pouring intent of a scene (keys ``pouring.position`` and ``pouring.tilt``)."""
-        try:
-            pouring = scene["pouring"]
-            return cls(name, pouring["position"], pouring["tilt"], **kwargs)
-        except KeyError as error:
-            raise ValueError(f"scene has no pouring.{error.args[0]} (needed by {name!r})") from None
+    def from_scene(cls, scene: Scene, name: str = "pour", **kwargs) -> PouringIntent:
+        """The pouring intent of a scene: its ``pouring.position`` and ``pouring.tilt``.
+
+        Examples
+        --------
+        >>> from casa_core.scene import load_scene
+        >>> PouringIntent.from_scene(load_scene())
+        PouringIntent('pour', target=[0.56, 0.22, 0.32], tilt=1.8)
+        """
+        return cls(name, scene.pouring.position, tilt=scene.pouring.tilt, **kwargs)
 
     def __repr__(self) -> str:
         return f"PouringIntent({self.name!r}, target={self.target.tolist()}, tilt={self.tilt})"

@@ -10,38 +10,52 @@ from __future__ import annotations
 
 import numpy as np
 
-TASKS = ("familiarization", "known_goal", "unknown_goal", "unknown_skill")
+from casa_core.scene import Scene
+from casa_core.vocabulary import TASKS
 
 
-def task_waypoints(task: str, scene: dict) -> np.ndarray:
-    """Waypoints ``(n, 4)`` of ``[x, y, z, rot]`` that the task's reference visits in order."""
-    start = [*scene["start"]["position"], scene["start"]["rot"]]
-    goals = scene["goals"]
+def task_waypoints(task: str, scene: Scene) -> np.ndarray:
+    """Waypoints ``(n, 4)`` of ``[x, y, z, rot]`` that the task's reference visits in order.
+
+    Examples
+    --------
+    >>> from casa_core.scene import load_scene
+    >>> task_waypoints("unknown_skill", load_scene())[:, 3].tolist()
+    [0.0, 0.0, 1.8]
+    """
+    start = scene.start_state
     if task in ("known_goal", "familiarization"):
-        return np.array([start, [*goals["green"], 0.0]])
+        return np.array([start, [*scene.goals["green"], 0.0]])
     if task == "unknown_goal":
-        return np.array([start, [*goals["red"], 0.0]])
+        return np.array([start, [*scene.goals["red"], 0.0]])
     if task == "unknown_skill":
-        pour = scene["pouring"]["position"]
-        return np.array([start, [*pour, 0.0], [*pour, scene["pouring"]["tilt"]]])
+        pour = scene.pouring.position
+        return np.array([start, [*pour, 0.0], [*pour, scene.pouring.tilt]])
     raise ValueError(f"unknown task {task!r}; expected one of {', '.join(TASKS)}")
 
 
-def intended_trajectory(task: str, scene: dict, dt: float | None = None) -> np.ndarray:
+def intended_trajectory(task: str, scene: Scene, dt: float | None = None) -> np.ndarray:
     """The task's reference as an array ``(n, 5)`` of ``[t, x, y, z, rot]``.
 
     Each segment between waypoints is driven at ``teleop.speed`` (m/s) for the
     position and ``teleop.rot_speed`` (rad/s) for the rotation, whichever takes
     longer, and sampled every ``dt`` seconds (default: the control tick); the
     last sample sits exactly on the last waypoint.
+
+    Examples
+    --------
+    >>> from casa_core.scene import load_scene
+    >>> reference = intended_trajectory("known_goal", load_scene())
+    >>> reference[-1, 1:].tolist()  # at the green goal, cup upright
+    [0.58, 0.0, 0.3, 0.0]
     """
-    teleop = scene["teleop"]
-    dt = teleop["dt"] if dt is None else dt
+    teleop = scene.teleop
+    dt = teleop.dt if dt is None else dt
     waypoints = task_waypoints(task, scene)
     times = [0.0]
     for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
         duration = max(
-            np.linalg.norm(b[:3] - a[:3]) / teleop["speed"], abs(b[3] - a[3]) / teleop["rot_speed"]
+            np.linalg.norm(b[:3] - a[:3]) / teleop.speed, abs(b[3] - a[3]) / teleop.rot_speed
         )
         times.append(times[-1] + duration)
     t = np.arange(0.0, times[-1], dt)

@@ -78,6 +78,12 @@ CONDITIONS = (
     "NA after learning",
     "PBA after learning",
 )
+#: The conditions the protocol runs on each analysed task.
+TASK_CONDITIONS = {
+    "known_goal": ("NA", "PBA", "CASA"),
+    "unknown_goal": ("NA", "PBA", CASA_BEFORE_LEARNING, CASA_AFTER_LEARNING),
+    "unknown_skill": ("NA", "PBA", CASA_BEFORE_LEARNING, CASA_AFTER_LEARNING),
+}
 
 
 def condition_of(method: str, phase: str) -> str | None:

@@ -9,9 +9,10 @@ import pandas as pd
 import pytest
 from test_logs_synthetic import SCENE, write_dataset
 
-from casa_core import datasets, logs, metrics
+from casa_core import datasets, metrics, tasks
+from casa_core.io import find_files, read_trial
 
-# The column contract with users (issue 8); extra columns may follow.
+# The column contract with users (docs/data-contracts.md); extra columns may follow.
 TRIALS = [
     "dataset",
     "participant",
@@ -53,10 +54,10 @@ def test_tables_follow_the_column_contract(raw, tmp_path):
 
 def test_trials_rows_are_the_metrics_of_each_log(raw, tmp_path):
     trials = datasets.build_tables(raw, SCENE).trials.set_index("trial")
-    meta, frame = logs.read_trial(raw / "p02" / "unknown_skill_PBA_before_learning")
-    from casa_core import tasks
-
-    expected = metrics.trial_metrics(frame, tasks.intended_trajectory("unknown_skill", SCENE), 0.05)
+    meta, frame = read_trial(raw / "p02" / "unknown_skill_PBA_before_learning")
+    expected = metrics.trial_metrics(
+        frame, tasks.intended_trajectory("unknown_skill", SCENE), dt=0.05
+    )
     row = trials.loc["p02/unknown_skill_PBA_before_learning"]
     for key, value in expected.items():
         assert row[key] == pytest.approx(value, rel=1e-12)
@@ -67,7 +68,7 @@ def test_trials_rows_are_the_metrics_of_each_log(raw, tmp_path):
 def test_steps_are_long_one_row_per_tick_and_intent(raw):
     steps = datasets.build_tables(raw, SCENE).steps
     trial = steps[steps["trial"] == "p01/known_goal_CASA_no_misspecification"]
-    _, frame = logs.read_trial(raw / "p01" / "known_goal_CASA_no_misspecification")
+    _, frame = read_trial(raw / "p01" / "known_goal_CASA_no_misspecification")
     assert len(trial) == 2 * len(frame)  # intents green and purple
     green = trial[trial["intent"] == "green"].reset_index(drop=True)
     pd.testing.assert_series_equal(green["beta"], frame["beta:green"], check_names=False)
@@ -86,7 +87,7 @@ def test_same_raw_files_give_the_same_bytes(raw, tmp_path):
 
 
 def _digests(folder):
-    return {p: hashlib.sha256(p.read_bytes()).digest() for p in logs.find_files(folder)}
+    return {p: hashlib.sha256(p.read_bytes()).digest() for p in find_files(folder)}
 
 
 def _break(folder):

@@ -1,7 +1,7 @@
 """The paper's equations: closed forms, properties and guards.
 
 Expected numbers are worked by hand from the equations cited in each test
-(paper Sec. II; NOTES section 2), or come from an independent numerical
+(paper Sec. II; docs/paper-to-code.md), or come from an independent numerical
 optimizer (scipy) rather than from the code under test.
 """
 
@@ -9,8 +9,17 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from casa_core.arbitration import alpha_belief, alpha_confidence, alpha_distance, blend
-from casa_core.confidence import beta_hat, suboptimality
+from casa_core._checks import require_positive
+from casa_core.arbitration import (
+    _alpha_belief,
+    _alpha_confidence,
+    _alpha_distance,
+    alpha_belief,
+    alpha_confidence,
+    alpha_distance,
+    blend,
+)
+from casa_core.confidence import _suboptimality, beta_hat, suboptimality
 from casa_core.inference import log_likelihood, posterior
 
 
@@ -79,7 +88,7 @@ def test_beta_hat_grows_with_evidence_at_fixed_suboptimality():
         ({"subopt": np.nan, "t": 2, "k": 7}, "subopt contains NaN"),
         ({"subopt": 1.0, "t": np.nan, "k": 7}, "t contains NaN"),
         ({"subopt": 1.0, "t": -1, "k": 7}, "t must be >= 0"),
-        ({"subopt": 1.0, "t": 2, "k": 0}, "k"),
+        ({"subopt": 1.0, "t": 2, "k": 0}, "k must be a positive number, got 0"),
         ({"subopt": 1.0, "t": 2, "k": 7, "lam": -4.0}, "lam must be >= 0"),
     ],
 )
@@ -142,12 +151,12 @@ def test_alpha_confidence():
 
 def test_alpha_distance():
     np.testing.assert_allclose(alpha_distance([0.0, 0.275, 0.55, 2.0], 0.55), [0, 0.5, 1, 1])
-    with pytest.raises(ValueError, match="D"):
+    with pytest.raises(ValueError, match="D must be a positive number"):
         alpha_distance(0.1, 0.0)
 
 
 def test_alpha_belief_is_one_for_uniform_and_zero_for_certain_belief():
-    # NOTES section 2: alpha = 1 - (P |Theta| - 1) / (|Theta| - 1), clipped
+    # docs/departures.md: alpha = 1 - (P |Theta| - 1) / (|Theta| - 1), clipped
     assert alpha_belief(1 / 3, 3) == pytest.approx(1.0)
     assert alpha_belief(1.0, 3) == 0.0
     assert alpha_belief(2 / 3, 3) == pytest.approx(0.5)  # 1 - (2 - 1) / 2
@@ -173,12 +182,37 @@ def test_blend():
 
 
 def test_scalar_arbitration_cores_match_the_public_functions():
-    # the assistant's unchecked per-step path must give the same alphas
-    from casa_core.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance
-
-    for beta in (0.0, 0.3, 1.0, 2.5, np.inf):
+    # the assistant's unchecked per-step path (Python floats in) gives the same alphas, exactly
+    for beta in (0.0, 0.3, 0.9999999999999999, 1.0, 1.0000000000000002, 2.5, np.inf):
         assert _alpha_confidence(beta) == alpha_confidence(beta)
     for d in (0.0, 0.2, 0.55, 3.0):
         assert _alpha_distance(d, 0.55) == alpha_distance(d, 0.55)
     for p in (0.0, 0.25, 1 / 3, 0.8, 1.0):
-        assert _alpha_belief(p, 3) == pytest.approx(alpha_belief(p, 3), abs=1e-15)
+        assert _alpha_belief(p, 3) == alpha_belief(p, 3)
+
+
+def test_suboptimality_core_is_the_public_formula():
+    prefix, to_go, optimal = np.array([3.0, 1.0, 0.1]), np.array([2.0, 2.0, 0.2]), 4.0
+    np.testing.assert_array_equal(
+        _suboptimality(prefix, to_go, optimal), suboptimality(prefix, to_go, optimal)
+    )
+
+
+@pytest.mark.parametrize(
+    ("owner", "values", "message"),
+    [
+        (None, {"k": 0}, "k must be a positive number, got 0"),
+        (None, {"D": np.inf}, "D must be a positive number, got inf"),
+        ("intent 'green'", {"speed": 0.05, "dt": -0.5}, "dt of intent 'green' must be a positive"),
+        ("Assistant", {"tick": np.nan}, "tick of Assistant must be a positive number, got nan"),
+        ("Assistant", {"horizon": None}, "horizon of Assistant must be a positive number"),
+        ("Assistant", {"horizon": "15"}, "horizon of Assistant must be a positive number"),
+    ],
+)
+def test_require_positive_names_the_parameter_and_its_owner(owner, values, message):
+    with pytest.raises(ValueError, match=message):
+        require_positive(owner, **values)
+
+
+def test_require_positive_accepts_positive_numbers():
+    require_positive("intent 'green'", speed=0.05, dt=0.5, scale=227, k=np.int64(7))

@@ -1,4 +1,4 @@
-"""Tests of the figures (issue 7): each figure is built from a small fixture table and the
+"""Tests of the figures: each figure is built from a small fixture table and the
 figure object is inspected (panels, series, labels, values).
 
 Expected bar heights and error bars are the closed forms mean = sum / n and standard error
@@ -25,6 +25,7 @@ from casa_core.figures import (
     style,
 )
 from casa_core.figures.objective import parse_comparison, stars
+from casa_core.vocabulary import CONDITIONS
 
 # --------------------------------------------------------------------------- fixtures
 
@@ -111,20 +112,39 @@ def texts(fig) -> str:
         ("CASA", "after_learning", "CASA after learning"),
         ("PBA", "before_learning", "PBA"),
         ("NA", "after_learning", "NA after learning"),
+        # Phases the study does not analyse keep the method's name.
+        ("NA", "familiarization", "NA"),
+        ("NA", "demonstration", "NA"),
     ],
 )
 def test_condition_names_follow_the_paper(method, phase, condition):
     # The task text: "CASA before learning" = method CASA with phase before_learning, etc.
-    assert style.condition_of(method, phase) == condition
+    assert style.row_condition(method, phase) == condition
 
 
 def test_condition_of_rejects_unknown_method():
     with pytest.raises(ValueError, match="unknown method 'XX'"):
-        style.condition_of("XX", "before_learning")
+        style.row_condition("XX", "before_learning")
+    with pytest.raises(ValueError, match="unknown method 'XX'"):
+        style.row_condition("XX", "familiarization")
+
+
+def test_figures_import_no_robot_study_or_learning():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, casa_core.figures, casa_core.figures.build; "
+        "bad = sorted(m for m in sys.modules if m.split('.')[:2] in "
+        "(['casa_core', 'robot'], ['casa_core', 'study'], ['casa_core', 'learning']) "
+        "or m == 'pybullet'); print(bad)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
 
 
 def test_every_condition_has_a_distinct_colour():
-    colours = [style.METHOD_COLOURS[c] for c in style.CONDITIONS]
+    colours = [style.METHOD_COLOURS[c] for c in CONDITIONS]
     assert len(set(colours)) == len(colours)
 
 
@@ -396,7 +416,7 @@ def test_arbitration_rejects_missing_column_and_text():
     table = make_arbitration()
     table["beta"] = table["beta"].astype(object)
     table.loc[3, "beta"] = "high"
-    with pytest.raises(ValueError, match="arbitration row 3: beta 'high' is not a number"):
+    with pytest.raises(ValueError, match="arbitration: column 'beta', row 3: 'high' is not"):
         arbitration_figure(table)
 
 

@@ -6,19 +6,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from test_figures import make_arbitration, make_likert, make_steps, make_trials, tukey  # noqa: I001
 
 from casa_core.cli import main
-from casa_core.figures.scene import TASK_PATHS, crop_background, render_scene, scene_figure
+from casa_core.figures.scene import TASK_PATHS, crop_background, scene_figure
+from casa_core.robot.render import render_scene
+from casa_core.scene import Scene, load_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "config" / "scene.yaml"
 
 
 @pytest.fixture(scope="module")
-def scene() -> dict:
-    with open(SCENE, encoding="utf-8") as handle:
-        return yaml.safe_load(handle)
+def scene() -> Scene:
+    return load_scene(SCENE)
 
 
 def write(frame, path: Path) -> str:
@@ -58,14 +58,14 @@ def test_cli_reports_bad_input_and_fails(tmp_path, capsys):
     trials = write(make_trials().drop(columns="error"), tmp_path / "trials.csv")
     code = main(["figure", "objective", "--trials", trials, "--out", str(tmp_path / "o")])
     assert code == 1
-    assert "casa figure objective: trials: missing column(s) error" in capsys.readouterr().err
+    assert "casa figure objective: trials: missing column(s) 'error'" in capsys.readouterr().err
     assert not (tmp_path / "o.pdf").exists()
     missing = str(tmp_path / "nope.csv")
     assert main(["figure", "likert", "--likert", missing, "--out", str(tmp_path / "l")]) == 1
 
 
 def test_scene_render_shows_goals_and_paths(scene):
-    image = render_scene(scene, width=320, height=240)
+    image = render_scene(scene, TASK_PATHS, width=320, height=240)
     assert image.shape == (240, 320, 3) and image.dtype == np.uint8
     r, g, b = (image[:, :, i].astype(int) for i in range(3))
     # The goals are spheres in the paper's colours: some pixels must be clearly green,
@@ -77,13 +77,21 @@ def test_scene_render_shows_goals_and_paths(scene):
     assert cropped.shape[0] <= 240 and cropped.shape[1] <= 320
 
 
-def test_scene_figure_legend_and_cli(scene, tmp_path):
+def test_scene_figure_legend_and_cli(tmp_path):
     image = np.full((60, 80, 3), 255, dtype=np.uint8)
     image[20:40, 30:50] = (10, 200, 30)
-    fig = scene_figure(scene, image)
+    fig = scene_figure(image)
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert "red goal (unknown)" in labels
     assert len(labels) == 3 + len(TASK_PATHS)
     out = tmp_path / "scene.png"
     assert main(["figure", "scene", "--scene", str(SCENE), "--out", str(out)]) == 0
     assert out.exists() and not (tmp_path / "scene.pdf").exists()
+
+
+def test_cli_scene_error_names_the_key(tmp_path, capsys):
+    bad = tmp_path / "scene.yaml"
+    bad.write_text(SCENE.read_text(encoding="utf-8").replace("teleop:", "teleoperation:"))
+    assert main(["figure", "scene", "--scene", str(bad), "--out", str(tmp_path / "s.png")]) == 1
+    assert "teleop" in capsys.readouterr().err
+    assert not (tmp_path / "s.png").exists()

@@ -66,6 +66,15 @@ def test_goal_intent_rejects_bad_parameters():
         GoalIntent("g", GOAL, cost="euclid")
     with pytest.raises(ValueError, match="goal of intent 'g'"):
         GoalIntent("g", [0.0, np.nan, 0.0])
+    with pytest.raises(ValueError, match="speed of intent 'g' must be a positive number, got 0"):
+        GoalIntent("g", GOAL, speed=0)
+    with pytest.raises(ValueError, match="dt of intent 'g' must be a positive number, got -0.5"):
+        GoalIntent("g", GOAL, dt=-0.5)
+
+
+def test_goal_intent_takes_its_options_by_keyword_only():
+    with pytest.raises(TypeError):
+        GoalIntent("g", GOAL, "distance_sum")
 
 
 def make_assistant(arbitration="confidence", **kwargs):
@@ -149,9 +158,37 @@ def test_assistant_guards():
         Assistant([GoalIntent("a", GOAL)], arbitration="magic")
     with pytest.raises(ValueError, match="unique"):
         Assistant([GoalIntent("a", GOAL), GoalIntent("a", -GOAL)])
+    with pytest.raises(ValueError, match="pba_distance of Assistant must be a positive number"):
+        Assistant([GoalIntent("a", GOAL)], pba_distance=0.0)
+    with pytest.raises(ValueError, match="lam of Assistant must be a number >= 0"):
+        Assistant([GoalIntent("a", GOAL)], lam=-1.0)
+    with pytest.raises(TypeError):
+        Assistant([GoalIntent("a", GOAL)], "distance")  # options are keyword-only
     assistant = make_assistant()
     with pytest.raises(ValueError, match="finite"):
         assistant.update([0.0, np.nan, 0.0, 0.0])
+    with pytest.raises(ValueError, match="start state must be finite"):
+        assistant.reset([0.0, np.inf, 0.0, 0.0])
+
+
+def test_assistant_needs_reset_before_a_trial():
+    assistant = Assistant([GoalIntent("a", GOAL)])
+    assert assistant.latest is None
+    for call, args in (
+        (assistant.update, (START,)),
+        (assistant.act, (START, np.zeros(4))),
+        (assistant.robot_action, (START,)),
+    ):
+        with pytest.raises(
+            RuntimeError, match=rf"call reset\(start_state\) before {call.__name__}"
+        ):
+            call(*args)
+    assistant.reset(START)
+    assert assistant.latest is None
+    user = np.array([0.05, 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(assistant.act(START, user), user)  # full control before t = 1
+    assert assistant.update(START).t == 0.5
+    assert assistant.latest is not None
 
 
 def drive(evidence, arbitration="confidence", switch_after=4, steps=24, tick=0.05):

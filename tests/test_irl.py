@@ -1,29 +1,36 @@
-"""Deep maximum-entropy IRL (casa_core.irl): recovering a known goal from demonstrations."""
+"""Deep maximum-entropy IRL (casa_core.learning): recovering a known goal from demonstrations."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import torch
-import yaml
 
-from casa_core.irl import (
+from casa_core.learning import (
     IRLConfig,
+    MaxEntIRL,
     NeuralIntent,
     cost_network,
     demo_waypoints,
+    end_match,
     feature_names,
-    learn_intent,
-    learning_evidence,
-    scene_objects,
     state_features,
 )
+from casa_core.scene import load_scene
 from casa_core.skills import PouringIntent
+from casa_core.study.learning_evidence import learning_evidence, scene_objects
 from casa_core.tasks import intended_trajectory
 
-SCENE = yaml.safe_load(open("config/scene.yaml", encoding="utf-8"))
-START = np.array([*SCENE["start"]["position"], 0.0])
-GOAL = np.array(SCENE["goals"]["red"])
+SCENE = load_scene()
+OBJECTS = scene_objects(SCENE)
+START = SCENE.start_state
+GOAL = SCENE.goal("red")
+
+
+def learn(demos, name, seed=0, config=None, objects=OBJECTS):
+    """The intent and history learned by the estimator, as the study learns them."""
+    learner = MaxEntIRL(name, config=config, seed=seed).fit(demos, objects)
+    return learner.intent_, learner.history_
 
 
 def noisy_straight_lines(goal, rng, n=5, speed=0.05, dt=0.05, noise=0.005):
@@ -48,12 +55,12 @@ def noisy_straight_lines(goal, rng, n=5, speed=0.05, dt=0.05, noise=0.005):
 @pytest.fixture(scope="module")
 def learned():
     demos = noisy_straight_lines(GOAL, np.random.default_rng(20210530))
-    intent, history = learn_intent(demos, SCENE, "red_learned", seed=0)
+    intent, history = learn(demos, "red_learned", seed=0)
     return demos, intent, history
 
 
 def test_irl_recovers_a_known_goal(learned):
-    # Issue 5: the optimal trajectory under the learned cost must end within 5 cm of the goal.
+    # The optimal trajectory under the learned cost must end within 5 cm of the goal.
     demos, intent, history = learned
     trajectory = intent.optimal_trajectory(START, 15.0)
     assert np.linalg.norm(trajectory[-1, :3] - GOAL) < 0.05
@@ -65,7 +72,7 @@ def test_irl_recovers_a_known_goal(learned):
 
 
 def test_irl_learns_to_pour():
-    # Issue 5 target for Unknown Skill: the learned optimum ends tilted past 60 degrees.
+    # Unknown Skill: the learned optimum ends tilted past 60 degrees.
     # Demonstrations: the task's reference (carry, then tilt by 1.8 rad = 103 degrees)
     # with 5 mm / 0.02 rad of white noise and up to 1 cm of offset, seeded.
     rng = np.random.default_rng(7)
@@ -76,7 +83,7 @@ def test_irl_learns_to_pour():
         demo[:, 1:4] += rng.normal(0.0, 0.005, (len(demo), 3)) + rng.uniform(-0.01, 0.01, 3)
         demo[:, 4] += rng.normal(0.0, 0.02, len(demo))
         demos.append(demo)
-    intent, _ = learn_intent(demos, SCENE, "pour_learned", seed=0)
+    intent, _ = learn(demos, "pour_learned", seed=0)
     evidence = learning_evidence(intent, demos)
     assert evidence["final_tilt_deg"] > 60.0
     assert evidence["endpoint_error_m"] < 0.05
@@ -100,8 +107,10 @@ def test_training_history_is_complete(learned):
     assert verified[kept[0]["iteration"]] == min(verified.values())
     assert kept[0]["end_distance_m"] < history[0]["end_distance_m"]
 
-    def match(h):  # metres plus 0.1 m per radian, as documented in learn_intent
+    def match(h):  # metres plus 0.1 m per radian, as documented in MaxEntIRL
         return h["end_distance_m"] + 0.1 * h["end_rot_error"]
+
+    assert match(history[0]) == end_match(history[0]["end_distance_m"], history[0]["end_rot_error"])
 
     best = sorted(match(h) for h in history)[: IRLConfig().verify_candidates]
     assert match(kept[0]) in best
@@ -128,9 +137,9 @@ def test_learned_intent_is_cheap_per_assistance_step(learned):
 def test_same_seed_same_intent_and_seed_matters():
     demos = noisy_straight_lines(GOAL, np.random.default_rng(1), n=2)
     config = IRLConfig(max_iterations=2, min_iterations=2, explore_iterations=5)
-    a, history_a = learn_intent(demos, SCENE, "a", seed=3, config=config)
-    b, history_b = learn_intent(demos, SCENE, "b", seed=3, config=config)
-    c, _ = learn_intent(demos, SCENE, "c", seed=4, config=config)
+    a, history_a = learn(demos, "a", seed=3, config=config)
+    b, history_b = learn(demos, "b", seed=3, config=config)
+    c, _ = learn(demos, "c", seed=4, config=config)
     pairs = list(zip(a.network.parameters(), b.network.parameters(), strict=True))
     assert all(torch.equal(pa, pb) for pa, pb in pairs)
     others = zip(a.network.parameters(), c.network.parameters(), strict=True)
@@ -145,21 +154,21 @@ def test_demo_waypoints_resample_and_hold_the_end():
     # A line at 0.1 m/s along x for 1 s, sampled every 0.05 s: at k * 0.5 s, x = 0.05 k.
     t = np.linspace(0.0, 1.0, 21)
     demo = np.column_stack([t + 7.0, 0.1 * t, np.zeros_like(t), np.zeros_like(t), 0.2 * t])
-    waypoints = demo_waypoints(demo, 0.5, 4)
+    waypoints = demo_waypoints(demo, dt=0.5, n_steps=4)
     np.testing.assert_allclose(waypoints[:, 0], [0.0, 0.05, 0.1, 0.1, 0.1])
     np.testing.assert_allclose(waypoints[:, 3], [0.0, 0.1, 0.2, 0.2, 0.2])
     with pytest.raises(ValueError, match="increasing"):
-        demo_waypoints(demo[::-1], 0.5, 4)
+        demo_waypoints(demo[::-1], dt=0.5, n_steps=4)
     with pytest.raises(ValueError, match=r"\(n >= 2, 5\)"):
-        demo_waypoints(demo[:, :4], 0.5, 4)
+        demo_waypoints(demo[:, :4], dt=0.5, n_steps=4)
 
 
 def test_features_are_documented_and_computed():
-    names, objects = scene_objects(SCENE)
+    names, objects = list(OBJECTS), np.array(list(OBJECTS.values()))
     assert names == ["green", "purple", "red", "pouring", "bowl"]
     labels = feature_names(names)
     state = torch.tensor([[0.4, 0.1, 0.2, 0.0]], dtype=torch.float64)
-    features = state_features(state, torch.as_tensor(objects), 0.1)[0].double().numpy()
+    features = state_features(state, torch.as_tensor(objects), length_scale=0.1)[0].double().numpy()
     assert len(labels) == features.shape[0] == 9 + 3 + 3 * 5 + 5
     assert features[labels.index("x")] == pytest.approx(4.0)  # 0.4 m / 0.1 m
     red = labels.index("red_distance")
@@ -199,12 +208,11 @@ def test_resting_where_the_demonstrations_end_is_free(learned):
 
 
 def test_cost_is_bounded():
-    names, objects = scene_objects(SCENE)
-    network = cost_network(len(feature_names(names)), 128, 0.01, seed=0)
+    network = cost_network(len(feature_names(OBJECTS)), hidden=128, negative_slope=0.01, seed=0)
     with torch.no_grad():
         network[-1].bias.fill_(1e3)  # drive the output far into saturation
     intent = NeuralIntent(
-        "n", network, names, objects, cost_scale=10.0, length_scale=0.1, cost_offset=2.0
+        "n", network, objects=OBJECTS, cost_scale=10.0, length_scale=0.1, cost_offset=2.0
     )
     costs = intent.costs_of(np.array([START, [0.1, 0.2, 0.3, 1.0]]))
     assert ((costs >= -2.0) & (costs <= 8.0)).all()
@@ -221,11 +229,40 @@ def test_learning_evidence_of_the_pouring_intent():
 
 def test_bad_demonstrations_are_named():
     with pytest.raises(ValueError, match="at least one"):
-        learn_intent([], SCENE, "x", seed=0)
+        learn([], "x")
     with pytest.raises(ValueError, match="'x'.*strictly increasing"):
-        learn_intent([np.zeros((3, 5))], SCENE, "x", seed=0)
-    with pytest.raises(ValueError, match=r"scene has no goals\.green"):
-        learn_intent(noisy_straight_lines(GOAL, np.random.default_rng(0), n=1), {}, "x", seed=0)
+        learn([np.zeros((3, 5))], "x")
+
+
+def test_bad_objects_are_named():
+    demos = noisy_straight_lines(GOAL, np.random.default_rng(0), n=1)
+    with pytest.raises(ValueError, match=r"'x'.*object 'red' must be 3 finite numbers"):
+        learn(demos, "x", objects={"green": GOAL, "red": [0.4, np.nan, 0.1]})
+    with pytest.raises(ValueError, match="'x'.*objects must map names to positions"):
+        learn(demos, "x", objects=[GOAL])
+    with pytest.raises(ValueError, match="intent 'n'.*object 'red'"):
+        NeuralIntent(
+            "n",
+            cost_network(16, hidden=8, negative_slope=0.01, seed=0),
+            objects={"red": [0.4, 0.2]},
+            cost_scale=1.0,
+            length_scale=0.1,
+        )
+
+
+def test_the_estimator_stores_parameters_and_fits_attributes():
+    config = IRLConfig(max_iterations=2, min_iterations=2, explore_iterations=5)
+    learner = MaxEntIRL("a", config=config, seed=3)
+    assert (learner.name, learner.config, learner.seed) == ("a", config, 3)
+    assert not hasattr(learner, "intent_")  # nothing is learned before fit
+    demos = noisy_straight_lines(GOAL, np.random.default_rng(1), n=2)
+    assert learner.fit(demos, OBJECTS) is learner
+    assert learner.intent_.name == "a" and learner.intent_.object_names == list(OBJECTS)
+    assert learner.n_iter_ == len(learner.history_) == 2
+    assert learner.history_[learner.kept_iteration_ - 1]["kept"] is True
+    assert learner.converged_ == learner.history_[-1]["converged"]
+    assert learner.calibration_ == learner.history_[learner.kept_iteration_ - 1]["calibration"]
+    assert learner.intent_.planner == config.assist_planner()
 
 
 def test_a_cost_whose_own_optimum_misses_the_demonstrations_is_not_kept():
@@ -234,7 +271,7 @@ def test_a_cost_whose_own_optimum_misses_the_demonstrations_is_not_kept():
     # iteration whose D^phi matched best (1) has a cost whose optimum goes to the
     # wrong place, and the next one (2) reaches the demonstrations' end.
     from casa_core.intents import GoalIntent
-    from casa_core.irl import _verified_choice
+    from casa_core.learning.maxent import _verified_choice
     from casa_core.planning import PlannerConfig
 
     class Reaching(GoalIntent):

@@ -10,30 +10,35 @@ import numpy as np
 import pandas as pd
 import pytest
 import torch
-import yaml
 
 from casa_core import library
-from casa_core.irl import IRLConfig, NeuralIntent, cost_network, feature_names, scene_objects
-from casa_core.logs import write_trial
+from casa_core.io import write_trial
+from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
+from casa_core.learning.from_logs import read_demonstrations
+from casa_core.scene import load_scene
+from casa_core.study.learning_evidence import scene_objects
 
-SCENE = yaml.safe_load(open("config/scene.yaml", encoding="utf-8"))
+OBJECTS = scene_objects(load_scene())
 DEMOS = [np.column_stack([np.arange(4) * 0.5, np.full((4, 3), 0.4), np.zeros(4)])]
 HISTORY = [{"iteration": 1, "loss": 1.5, "end_moved_m": None, "converged": False}]
 
 
 def make_intent(name="red_p01", seed=0):
     """An untrained neural intent: weights are what the library must keep, trained or not."""
-    names, objects = scene_objects(SCENE)
     config = IRLConfig()
-    network = cost_network(len(feature_names(names)), config.hidden, config.negative_slope, seed)
+    network = cost_network(
+        len(feature_names(OBJECTS)),
+        hidden=config.hidden,
+        negative_slope=config.negative_slope,
+        seed=seed,
+    )
     guide = np.linspace([0.45, -0.22, 0.38, 0.0], [0.40, 0.22, 0.12, 0.0], 31)
     return NeuralIntent(
         name,
         network,
-        names,
-        objects,
-        config.cost_scale,
-        config.length_scale,
+        objects=OBJECTS,
+        cost_scale=config.cost_scale,
+        length_scale=config.length_scale,
         guides=[guide],
         cost_offset=1.25,
     )
@@ -66,7 +71,11 @@ def test_round_trip_keeps_the_cost_and_the_metadata(tmp_path):
     assert meta["history"] == HISTORY
     assert meta["format"] == "casa-intent" and meta["version"] == library.VERSION
     np.testing.assert_array_equal(entry.intent.guides[0], intent.guides[0])
-    assert not list(tmp_path.glob(".*tmp"))  # the atomic write left no temporary file
+    np.testing.assert_array_equal(entry.intent.objects, intent.objects)
+    assert entry.intent.object_names == intent.object_names == list(OBJECTS)
+    # The atomic write left no temporary file, and the lab can read the file.
+    assert [p.name for p in tmp_path.iterdir()] == ["red_p01.intent.json"]
+    assert path.stat().st_mode & 0o777 == 0o644
 
 
 def test_demo_hash_changes_with_the_demo():
@@ -206,9 +215,9 @@ def test_only_demonstrations_are_read_from_a_participant_folder(tmp_path):
     # the robot pulled the arm toward another intent: they are not demonstrations.
     write_demo_logs(tmp_path, n=2)
     write_demo_logs(tmp_path, n=3, phase="before_learning", stem="assisted")
-    demos, metas = library.read_demonstrations(tmp_path, "unknown_goal")
+    demos, metas = read_demonstrations(tmp_path, "unknown_goal")
     assert len(demos) == 2 and {m["phase"] for m in metas} == {"demonstration"}
-    assert len(library.read_demonstrations(tmp_path, "unknown_goal", phase=None)[0]) == 5
+    assert len(read_demonstrations(tmp_path, "unknown_goal", phase=None)[0]) == 5
 
 
 def test_cli_learn_names_the_phases_it_found_when_none_is_a_demonstration(tmp_path):

@@ -1,4 +1,4 @@
-"""The casa-trial/1 contract (NOTES.md section 3): round trips and every rule's error."""
+"""The casa-trial/1 contract (docs/data-contracts.md): round trips and every rule's error."""
 
 from __future__ import annotations
 
@@ -10,7 +10,21 @@ import pandas as pd
 import pytest
 from test_logs_synthetic import trial_frame, write_dataset
 
-from casa_core import logs
+from casa_core.io import (
+    SCHEMA,
+    SURVEY_COLUMNS,
+    LogError,
+    check_meta,
+    check_paths,
+    find_files,
+    parse_trial_csv,
+    read_surveys,
+    read_trial,
+    validate_paths,
+    write_surveys,
+    write_trial,
+)
+from casa_core.vocabulary import QUESTIONS
 
 META = {
     "participant": "p01",
@@ -40,9 +54,9 @@ def small_frame() -> pd.DataFrame:
 
 def test_round_trip_keeps_every_value(tmp_path):
     frame = small_frame()
-    logs.write_trial(tmp_path / "p01" / "trial.1", META, frame)
-    meta, read = logs.read_trial(tmp_path / "p01" / "trial.1")
-    assert meta == {"schema": logs.SCHEMA, **META}
+    write_trial(tmp_path / "p01" / "trial.1", META, frame)
+    meta, read = read_trial(tmp_path / "p01" / "trial.1")
+    assert meta == {"schema": SCHEMA, **META}
     pd.testing.assert_frame_equal(read, frame)
     # A dotted stem stays one stem: no "trial.csv" next to "trial.1.csv".
     assert sorted(p.name for p in (tmp_path / "p01").iterdir()) == ["trial.1.csv", "trial.1.json"]
@@ -51,7 +65,7 @@ def test_round_trip_keeps_every_value(tmp_path):
 def test_written_files_are_deterministic_bytes(tmp_path):
     frame = trial_frame("unknown_skill", intents=("green",), rng=np.random.default_rng(3))
     for folder in ("a", "b"):
-        logs.write_trial(tmp_path / folder / "trial", META, frame)
+        write_trial(tmp_path / folder / "trial", META, frame)
     for suffix in (".csv", ".json"):
         a = (tmp_path / "a" / f"trial{suffix}").read_bytes()
         assert a == (tmp_path / "b" / f"trial{suffix}").read_bytes()
@@ -74,8 +88,8 @@ META_CASES = [
 
 @pytest.mark.parametrize("change, where, rule", META_CASES)
 def test_each_metadata_rule_is_reported(tmp_path, change, where, rule):
-    with pytest.raises(logs.LogError) as raised:
-        logs.write_trial(tmp_path / "t", {**META, **change}, small_frame())
+    with pytest.raises(LogError) as raised:
+        write_trial(tmp_path / "t", {**META, **change}, small_frame())
     assert [(p.file, p.where, p.rule) for p in raised.value.problems] == [
         (str(tmp_path / "t.json"), where, rule)
     ]
@@ -85,7 +99,7 @@ def test_each_metadata_rule_is_reported(tmp_path, change, where, rule):
 def test_missing_key_and_method_of_a_phase(tmp_path):
     meta = {k: v for k, v in META.items() if k != "source"}
     meta.update(task="unknown_goal", phase="demonstration", method="CASA")
-    problems = logs.check_meta({"schema": logs.SCHEMA, **meta}, "m.json")
+    problems = check_meta({"schema": SCHEMA, **meta}, "m.json")
     assert {(p.where, p.rule) for p in problems} == {
         ("key 'source'", "required-key"),
         ("key 'method'", "phase-method"),
@@ -119,8 +133,8 @@ FRAME_CASES = [
 
 @pytest.mark.parametrize("change, where, rule", FRAME_CASES)
 def test_each_frame_rule_is_reported(tmp_path, change, where, rule):
-    with pytest.raises(logs.LogError) as raised:
-        logs.write_trial(tmp_path / "t", META, change(small_frame()))
+    with pytest.raises(LogError) as raised:
+        write_trial(tmp_path / "t", META, change(small_frame()))
     assert [(p.file, p.where, p.rule) for p in raised.value.problems] == [
         (str(tmp_path / "t.csv"), where, rule)
     ]
@@ -128,15 +142,15 @@ def test_each_frame_rule_is_reported(tmp_path, change, where, rule):
 
 
 def test_every_problem_of_a_file_is_listed_at_once(tmp_path):
-    logs.write_trial(tmp_path / "t", META, small_frame())
+    write_trial(tmp_path / "t", META, small_frame())
     csv = tmp_path / "t.csv"
     lines = csv.read_text().splitlines()
     lines[1] = lines[1].replace("x+", "jump")  # keys, line 2
     lines[3] = "abc" + lines[3][lines[3].index(",") :]  # t, line 4
     csv.write_text("\n".join(lines) + "\n")
     (tmp_path / "t.json").write_text(json.dumps({**META, "task": "nope"}))
-    with pytest.raises(logs.LogError) as raised:
-        logs.read_trial(tmp_path / "t")
+    with pytest.raises(LogError) as raised:
+        read_trial(tmp_path / "t")
     rules = sorted(p.rule for p in raised.value.problems)
     assert rules == ["enum", "finite-number", "keys", "required-key"]  # schema key missing too
     assert "line 4" in str(raised.value) and "line 2" in str(raised.value)
@@ -145,7 +159,7 @@ def test_every_problem_of_a_file_is_listed_at_once(tmp_path):
 def test_long_runs_of_bad_lines_are_counted_not_spelled_out():
     header = "t,x,y,z,rot,keys\n"
     body = "".join(f"{i},nan,0,0,0,\n" for i in range(25))
-    _, problems = logs.parse_trial_csv(header + body, "f.csv")
+    _, problems = parse_trial_csv(header + body, "f.csv")
     (problem,) = problems
     assert problem.where.startswith("column 'x', lines 2, 3, 4")
     assert problem.where.endswith("(and 15 more)")
@@ -155,9 +169,9 @@ def test_unreadable_files(tmp_path):
     (tmp_path / "a.json").write_text("{not json")
     (tmp_path / "a.csv").write_text("")
     (tmp_path / "b.csv").write_text("t,x,x,y,z,rot,keys\n")
-    (tmp_path / "b.json").write_text(json.dumps({"schema": logs.SCHEMA, **META}))
-    (tmp_path / "c.json").write_text(json.dumps({"schema": logs.SCHEMA, **META}))
-    found = {(p.file, p.rule) for p in logs.validate_paths([tmp_path])}
+    (tmp_path / "b.json").write_text(json.dumps({"schema": SCHEMA, **META}))
+    (tmp_path / "c.json").write_text(json.dumps({"schema": SCHEMA, **META}))
+    found = {(p.file, p.rule) for p in validate_paths([tmp_path])}
     assert found == {
         (str(tmp_path / "a.json"), "json"),
         (str(tmp_path / "a.csv"), "csv-format"),
@@ -170,20 +184,20 @@ def test_surveys_round_trip_and_rules(tmp_path):
     answers = pd.DataFrame(
         [
             ["p01", "known_goal", "CASA", "no_misspecification", q, s]
-            for q, s in zip(logs.QUESTIONS, (7, 1, 4), strict=True)
+            for q, s in zip(QUESTIONS, (7, 1, 4), strict=True)
         ],
-        columns=list(logs.SURVEY_COLUMNS),
+        columns=list(SURVEY_COLUMNS),
     )
-    logs.write_surveys(tmp_path / "surveys.csv", answers)
-    read = logs.read_surveys(tmp_path / "surveys.csv")
+    write_surveys(tmp_path / "surveys.csv", answers)
+    read = read_surveys(tmp_path / "surveys.csv")
     pd.testing.assert_frame_equal(read, answers)
     bad = answers.astype({"score": object})
     bad.loc[0, "score"] = "8"
     bad.loc[1, "score"] = "2.5"
     bad.loc[2, "question"] = "fun"
     bad = pd.concat([bad, bad.iloc[[0]]])
-    with pytest.raises(logs.LogError) as raised:
-        logs.write_surveys(tmp_path / "x" / "surveys.csv", bad)
+    with pytest.raises(LogError) as raised:
+        write_surveys(tmp_path / "x" / "surveys.csv", bad)
     assert {(p.where, p.rule) for p in raised.value.problems} == {
         ("column 'score', lines 2, 3, 5", "likert-score"),
         ("column 'question', line 4", "enum"),
@@ -197,9 +211,9 @@ def test_folder_checks_pairs_duplicates_and_ignores_other_files(tmp_path):
     (tmp_path / ".hidden.csv").write_text("garbage")
     # The same condition twice would be counted twice by the statistics.
     copy = tmp_path / "p01" / "again"
-    meta, frame = logs.read_trial(tmp_path / "p01" / "known_goal_NA_no_misspecification")
-    logs.write_trial(copy, meta, frame)
-    checks = {c.file.relative_to(tmp_path).as_posix(): c for c in logs.check_paths([tmp_path])}
+    meta, frame = read_trial(tmp_path / "p01" / "known_goal_NA_no_misspecification")
+    write_trial(copy, meta, frame)
+    checks = {c.file.relative_to(tmp_path).as_posix(): c for c in check_paths([tmp_path])}
     assert checks["README.md"].kind == "other" and checks["README.md"].ok
     assert ".hidden.csv" not in checks
     assert checks["surveys.csv"].kind == "surveys" and checks["surveys.csv"].ok
@@ -209,13 +223,13 @@ def test_folder_checks_pairs_duplicates_and_ignores_other_files(tmp_path):
 
 
 def test_validate_paths_on_files_and_missing_paths(tmp_path):
-    logs.write_trial(tmp_path / "t", META, small_frame())
-    assert logs.validate_paths([tmp_path / "t.json"]) == []
-    assert logs.validate_paths([tmp_path / "t.csv"]) == []
-    (problem,) = logs.validate_paths([tmp_path / "nowhere"])
+    write_trial(tmp_path / "t", META, small_frame())
+    assert validate_paths([tmp_path / "t.json"]) == []
+    assert validate_paths([tmp_path / "t.csv"]) == []
+    (problem,) = validate_paths([tmp_path / "nowhere"])
     assert problem.rule == "exists"
     (tmp_path / "empty").mkdir()
-    (problem,) = logs.validate_paths([tmp_path / "empty"])
+    (problem,) = validate_paths([tmp_path / "empty"])
     assert problem.rule == "non-empty"
 
 
@@ -224,10 +238,10 @@ def test_checking_never_modifies_raw_files(tmp_path):
     (tmp_path / "p01" / "broken.json").write_text("{")
 
     def digest():
-        return {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in logs.find_files(tmp_path)}
+        return {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in find_files(tmp_path)}
 
     before = digest()
-    assert logs.validate_paths([tmp_path])
+    assert validate_paths([tmp_path])
     assert digest() == before
 
 
@@ -236,20 +250,35 @@ def test_ragged_rows_and_blank_lines():
     # Rows with too few or too many fields are named by their line; blank lines are skipped
     # but still counted, so line numbers match the file as an editor shows it.
     text = header + "0,1,1,1,0,x+\n\n0.05,1,1\n0.1,1,1,1,0,x+,5\n0.15,1,1,1,0,\n"
-    _, problems = logs.parse_trial_csv(text, "f.csv")
+    _, problems = parse_trial_csv(text, "f.csv")
     assert [(p.where, p.rule) for p in problems] == [("lines 4, 5", "csv-format")]
-    frame, problems = logs.parse_trial_csv(header + "\n0,1,1,1,0,x+\n\n0.05,1,1,1,0,x+\n", "f.csv")
+    frame, problems = parse_trial_csv(header + "\n0,1,1,1,0,x+\n\n0.05,1,1,1,0,x+\n", "f.csv")
     assert problems == [] and frame.index.tolist() == [0, 1]
-    _, problems = logs.parse_trial_csv(header + "\n0,1,1,1,0,x+\n\n0.05,1,nan,1,0,\n", "f.csv")
+    _, problems = parse_trial_csv(header + "\n0,1,1,1,0,x+\n\n0.05,1,nan,1,0,\n", "f.csv")
     assert [p.where for p in problems] == ["column 'y', line 5"]
 
 
 def test_write_normalizes_no_keys_and_refuses_non_json_metadata(tmp_path):
     frame = small_frame()
     frame["keys"] = [None, "x+", float("nan")]
-    logs.write_trial(tmp_path / "t", META, frame)
-    assert logs.read_trial(tmp_path / "t")[1]["keys"].tolist() == ["", "x+", ""]
-    with pytest.raises(logs.LogError) as raised:
-        logs.write_trial(tmp_path / "u", {**META, "seed": np.int64(3)}, small_frame())
+    write_trial(tmp_path / "t", META, frame)
+    assert read_trial(tmp_path / "t")[1]["keys"].tolist() == ["", "x+", ""]
+    with pytest.raises(LogError) as raised:
+        write_trial(tmp_path / "u", {**META, "seed": np.int64(3)}, small_frame())
     assert [p.rule for p in raised.value.problems] == ["json-value"]
     assert not (tmp_path / "u.json").exists()
+
+
+def test_metadata_values_of_the_wrong_type_are_problems_not_crashes():
+    meta = {"schema": SCHEMA, **META, "phase": ["demonstration"], "method": ["NA"]}
+    problems = check_meta(meta, "m.json")
+    assert [(p.where, p.rule) for p in problems] == [
+        ("key 'method'", "enum"),
+        ("key 'phase'", "enum"),
+    ]
+
+
+def test_written_logs_are_readable_by_everyone(tmp_path):
+    write_trial(tmp_path / "t", META, small_frame())
+    for suffix in (".json", ".csv"):
+        assert (tmp_path / f"t{suffix}").stat().st_mode & 0o777 == 0o644

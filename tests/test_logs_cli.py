@@ -9,6 +9,7 @@ from test_logs_synthetic import write_dataset
 
 from casa_core import datasets
 from casa_core.cli import main
+from casa_core.scene import DEFAULT_SCENE
 
 
 def test_valid_folder_exits_0(tmp_path, capsys):
@@ -55,7 +56,7 @@ def test_report_and_allow_invalid(tmp_path, capsys):
 
 def test_process_command_writes_the_tables(tmp_path, capsys):
     write_dataset(tmp_path / "ds", participants=("p01",))
-    scene = str(datasets.Path(__file__).resolve().parents[1] / "config" / "scene.yaml")
+    scene = str(DEFAULT_SCENE)
     out = tmp_path / "processed"
     assert main(["process", str(tmp_path / "ds"), "--out", str(out), "--scene", scene]) == 0
     trials = datasets.read_table(out / "trials.csv")
@@ -66,3 +67,19 @@ def test_process_command_writes_the_tables(tmp_path, capsys):
     assert main(["process", str(tmp_path / "ds"), "--out", str(out), "--scene", scene]) == 1
     assert "[json-object]" in capsys.readouterr().err
     pd.testing.assert_frame_equal(datasets.read_table(out / "trials.csv"), trials)  # untouched
+
+
+def test_process_names_the_bad_scene_key_without_a_traceback(tmp_path, capsys):
+    write_dataset(tmp_path / "ds", participants=("p01",), surveys=False)
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(DEFAULT_SCENE.read_text().replace("dt:", "tick:"))
+    assert (
+        main(
+            ["process", str(tmp_path / "ds"), "--out", str(tmp_path / "out")]
+            + ["--scene", str(scene)]
+        )
+        == 1
+    )
+    err = capsys.readouterr().err
+    assert err.startswith(f"casa process: {scene}: teleop.") and "Traceback" not in err
+    assert not (tmp_path / "out").exists()

@@ -1,4 +1,4 @@
-"""Synthetic casa-trial/1 datasets for the tests, written only through ``logs.write_trial``.
+"""Synthetic casa-trial/1 datasets for the tests, written only through ``casa_core.io.write_trial``.
 
 Not a participant model: each trial drives the task's intended trajectory with
 the keys that produce its motion, optionally scaled in time (a slower person),
@@ -13,12 +13,14 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import yaml
 
-from casa_core import logs, tasks
+from casa_core import tasks
+from casa_core.io import SURVEY_COLUMNS, read_trial, validate_paths, write_surveys, write_trial
+from casa_core.scene import load_scene
+from casa_core.vocabulary import QUESTIONS
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENE = yaml.safe_load((ROOT / "config" / "scene.yaml").read_text())
+SCENE = load_scene()
 AXES = ("x", "y", "z", "rot")
 
 # The study protocol of the paper (Sec. V-A), familiarization left out.
@@ -64,7 +66,7 @@ def trial_frame(
     intended = tasks.intended_trajectory(task, SCENE)
     rng = rng if rng is not None else np.random.default_rng(0)
     states = np.repeat(intended[:, 1:], slowdown, axis=0) + np.asarray(offset, dtype=float)
-    dt = SCENE["teleop"]["dt"]
+    dt = SCENE.teleop.dt
     frame = pd.DataFrame(states, columns=list(AXES))
     frame.insert(0, "t", np.arange(len(states)) * dt)
     frame["keys"] = keys_of_motion(states)
@@ -110,24 +112,24 @@ def write_dataset(
             frame = trial_frame(
                 task, offset=offset, slowdown=slowdown, intents=intents, lapses=0.05, rng=rng
             )
-            logs.write_trial(stem, meta, frame)
+            write_trial(stem, meta, frame)
             stems.append(stem)
     if surveys:
         rows = [
             (p, task, method, phase, question, int(rng.integers(1, 8)))
             for p in participants
             for task, method, phase in conditions
-            for question in logs.QUESTIONS
+            for question in QUESTIONS
         ]
-        answers = pd.DataFrame(rows, columns=list(logs.SURVEY_COLUMNS))
-        logs.write_surveys(folder / "surveys.csv", answers)
+        answers = pd.DataFrame(rows, columns=list(SURVEY_COLUMNS))
+        write_surveys(folder / "surveys.csv", answers)
     return stems
 
 
 def test_synthetic_dataset_is_valid_and_keys_reproduce_the_motion(tmp_path):
     stems = write_dataset(tmp_path / "ds", participants=("p01",))
-    assert logs.validate_paths([tmp_path / "ds"]) == []
+    assert validate_paths([tmp_path / "ds"]) == []
     # Keys and motion agree: each axis moves at most one teleoperation step per tick.
-    _, frame = logs.read_trial(stems[0])
+    _, frame = read_trial(stems[0])
     step = np.abs(np.diff(frame[["x", "y", "z"]].to_numpy(), axis=0)).max()
-    assert step <= SCENE["teleop"]["speed"] * SCENE["teleop"]["dt"] + 1e-12
+    assert step <= SCENE.teleop.speed * SCENE.teleop.dt + 1e-12

@@ -22,7 +22,7 @@ def line(t_end: float, x_end: float, n: int, rot_end: float = 0.0) -> np.ndarray
 
 def test_error_is_zero_on_the_intended_trajectory():
     intended = tasks.intended_trajectory("unknown_skill", SCENE)
-    assert metrics.trajectory_error(intended, intended, DT) == (0.0, 0.0)
+    assert metrics.trajectory_error(intended, intended, dt=DT) == (0.0, 0.0)
 
 
 def test_constant_offset_gives_ticks_times_offset_squared():
@@ -31,7 +31,7 @@ def test_constant_offset_gives_ticks_times_offset_squared():
     executed = line(1.0, 0.05, 21)
     executed[:, 2] += c
     executed[:, 4] += r
-    error, error_rot = metrics.trajectory_error(executed, INTENDED, DT)
+    error, error_rot = metrics.trajectory_error(executed, INTENDED, dt=DT)
     assert error == pytest.approx(21 * c**2, rel=1e-12)
     assert error_rot == pytest.approx(21 * r**2, rel=1e-12)
 
@@ -40,7 +40,7 @@ def test_standing_still_is_compared_with_the_whole_reference():
     # Executed stays at the start for 1 s: differences 0.05 j/20, j = 0..20,
     # sum = 0.05^2 / 400 * sum_j j^2 = 0.0025 / 400 * 2870.
     executed = np.array([[0.0, 0, 0, 0, 0], [1.0, 0, 0, 0, 0]])
-    error, _ = metrics.trajectory_error(executed, INTENDED, DT)
+    error, _ = metrics.trajectory_error(executed, INTENDED, dt=DT)
     assert error == pytest.approx(0.0025 / 400 * 2870, rel=1e-12)
 
 
@@ -49,10 +49,10 @@ def test_half_speed_lags_behind_a_reference_that_waits_at_its_goal():
     # difference is -0.025 s for s <= 1 and -0.025 (2 - s) after, so the sum is
     # 0.025^2 / 400 * (sum_{j<=20} j^2 + sum_{k<=19} k^2) = 0.000625 / 400 * (2870 + 2470).
     executed = line(2.0, 0.05, 41)
-    error, _ = metrics.trajectory_error(executed, INTENDED, DT)
+    error, _ = metrics.trajectory_error(executed, INTENDED, dt=DT)
     assert error == pytest.approx(0.000625 / 400 * (2870 + 2470), rel=1e-12)
     # Aligned in time, not in space: the same path at the reference's pace has no error.
-    assert metrics.trajectory_error(line(1.0, 0.05, 21), INTENDED, DT)[0] == pytest.approx(0.0)
+    assert metrics.trajectory_error(line(1.0, 0.05, 21), INTENDED, dt=DT)[0] == pytest.approx(0.0)
 
 
 def test_efficiency_cost_of_constant_and_uneven_velocities():
@@ -120,13 +120,13 @@ def test_trial_metrics_of_a_logged_trial():
     intended = tasks.intended_trajectory("known_goal", SCENE)
     frame = pd.DataFrame(intended, columns=["t", "x", "y", "z", "rot"])
     frame["keys"] = keys_of_motion(intended[:, 1:])
-    result = metrics.trial_metrics(frame, intended, DT)
+    result = metrics.trial_metrics(frame, intended, dt=DT)
     assert result["error"] == pytest.approx(0.0, abs=1e-20)
     assert result["duration"] == intended[-1, 0]
     # known_goal is one straight segment: the same three keys held until the last tick.
     assert result["effort"] == 3
     assert result["effort_ticks"] == 3 * (len(frame) - 1)
     # Driven at teleop.speed throughout (the last, shorter interval too): (n - 1) speed^2.
-    speed = SCENE["teleop"]["speed"]
+    speed = SCENE.teleop.speed
     assert result["efficiency"] == pytest.approx((len(frame) - 1) * speed**2, rel=1e-9)
     assert result["ticks"] == len(frame)

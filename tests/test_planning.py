@@ -79,11 +79,11 @@ def test_steps_respect_speed_limits():
     config = PlannerConfig()
     # A far goal and a rot pull: every step saturates somewhere.
     far = torch.tensor([2.0, -1.0, 1.0, 5.0], dtype=torch.float64)
-    plan = optimize(lambda s: ((s - far) ** 2).sum(-1), START, 30, config)
+    plan = optimize(lambda s: ((s - far) ** 2).sum(-1), START, 30, config=config)
     steps = np.diff(plan.states[0], axis=0)
     assert (np.abs(steps) <= config.max_step() + 1e-12).all()
     norm = PlannerConfig(limit="norm")
-    plan = optimize(lambda s: ((s - far) ** 2).sum(-1), START, 30, norm)
+    plan = optimize(lambda s: ((s - far) ** 2).sum(-1), START, 30, config=norm)
     steps = np.diff(plan.states[0], axis=0)
     assert (np.linalg.norm(steps[:, :3], axis=1) <= STEP + 1e-12).all()
 
@@ -146,6 +146,12 @@ def test_edges_and_bad_input():
         optimize(distance_cost(RED), START, 5, warm_start=np.zeros((1, 4, 4)))
     with pytest.raises(ValueError, match="limit"):
         PlannerConfig(limit="box")
+    with pytest.raises(ValueError, match="dt of PlannerConfig must be a positive number"):
+        PlannerConfig(dt=0.0)
+    with pytest.raises(ValueError, match="tol of PlannerConfig"):
+        PlannerConfig(tol=np.nan)
+    with pytest.raises(TypeError):  # the planner's settings are keywords after the steps
+        optimize(distance_cost(RED), START, 5, PlannerConfig())
 
 
 def test_feasible_leaves_feasible_states_alone_and_clips_the_rest():

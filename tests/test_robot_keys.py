@@ -1,9 +1,10 @@
-"""The 8-key map (NOTES section 1): 0.05 m/s per Cartesian key, 0.5 rad/s per rotate key."""
+"""The 8-key map: 0.05 m/s per Cartesian key, 0.5 rad/s per rotate key (the original's)."""
 
 import numpy as np
 import pytest
 
-from casa_core.robot.keys import KEYS, format_keys, keys_to_action, parse_keys
+from casa_core.robot.keys import AXIS_KEYS, format_keys, keys_to_action, parse_keys
+from casa_core.vocabulary import KEYS
 
 
 @pytest.mark.parametrize(
@@ -19,7 +20,7 @@ from casa_core.robot.keys import KEYS, format_keys, keys_to_action, parse_keys
         ("rot-", [0, 0, 0, -0.5]),
     ],
 )
-def test_each_key_moves_one_axis_at_the_notes_speed(key, expected):
+def test_each_key_moves_one_axis_at_the_key_speed(key, expected):
     np.testing.assert_allclose(keys_to_action([key]), expected)
 
 
@@ -41,3 +42,7 @@ def test_format_is_canonical_and_parse_inverts_it():
     assert parse_keys("x+ z+ rot-") == {"x+", "z+", "rot-"}
     assert parse_keys("") == frozenset()
     assert format_keys(KEYS) == " ".join(KEYS)
+
+
+def test_axis_keys_pair_each_axis_plus_and_minus():
+    assert AXIS_KEYS == (("x+", "x-"), ("y+", "y-"), ("z+", "z-"), ("rot+", "rot-"))

@@ -11,10 +11,10 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pybullet as p
 import pytest
-import yaml
 
 from casa_core.robot import kinematics as kin
 from casa_core.robot.sim import TOOL_LINK, URDF_PATH
+from casa_core.scene import load_scene
 
 
 @pytest.fixture(scope="module")
@@ -145,12 +145,11 @@ def test_inverse_kinematics_round_trip_and_unreachable_pose():
 
 
 def test_scene_positions_have_an_inverse_kinematics_solution():
-    with open("config/scene.yaml", encoding="utf-8") as handle:
-        layout = yaml.safe_load(handle)
-    poses = [(layout["start"]["position"], layout["start"]["rot"])]
-    poses += [(goal, 0.0) for goal in layout["goals"].values()]
-    poses += [(layout["pouring"]["position"], 0.0)]
-    poses += [(layout["pouring"]["position"], layout["pouring"]["tilt"])]
+    scene = load_scene()
+    poses = [(scene.start.position, scene.start.rot)]
+    poses += [(goal, 0.0) for goal in scene.goals.values()]
+    poses += [(scene.pouring.position, 0.0)]
+    poses += [(scene.pouring.position, scene.pouring.tilt)]
     for position, rot in poses:
         q = kin.inverse_kinematics(position, rot)
         np.testing.assert_allclose(kin.forward_kinematics(q)[:3, 3], position, atol=1e-5)

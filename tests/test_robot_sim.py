@@ -6,6 +6,8 @@ pybullet, not from the controller's own bookkeeping.
 """
 
 import copy
+import subprocess
+import sys
 
 import numpy as np
 import pybullet as p
@@ -13,25 +15,23 @@ import pytest
 import yaml
 
 from casa_core.robot import kinematics as kin
-from casa_core.robot.scene import check_layout
 from casa_core.robot.sim import ArmSimulation
+from casa_core.scene import DEFAULT_SCENE, Scene, SceneError, load_scene
 
 
 @pytest.fixture(scope="module")
-def layout():
-    with open("config/scene.yaml", encoding="utf-8") as handle:
-        return yaml.safe_load(handle)
+def scene():
+    return load_scene()
 
 
 @pytest.fixture()
-def sim(layout):
-    with ArmSimulation(layout) as simulation:
+def sim(scene):
+    with ArmSimulation(scene) as simulation:
         yield simulation
 
 
-def test_reset_puts_the_cup_at_the_start_pose(sim, layout):
-    np.testing.assert_allclose(sim.state[:3], layout["start"]["position"], atol=1e-5)
-    assert sim.state[3] == pytest.approx(layout["start"]["rot"], abs=1e-5)
+def test_reset_puts_the_cup_at_the_start_pose(sim, scene):
+    np.testing.assert_allclose(sim.state, scene.start_state, atol=1e-5)
     assert kin.within_limits(sim.q)
 
 
@@ -70,12 +70,12 @@ def test_rot_is_unwrapped_past_pi(sim):
     assert sim.state[3] == pytest.approx(4.0, abs=0.05)
 
 
-def test_every_scene_position_is_reached_in_a_straight_line_within_joint_limits(sim, layout):
-    """The reachability check of the layout with the fixed tool orientation."""
-    targets = [*layout["goals"].values(), layout["pouring"]["position"]]
+def test_every_scene_position_is_reached_in_a_straight_line_within_joint_limits(sim, scene):
+    """The reachability check of the scene with the fixed tool orientation."""
+    targets = [*scene.goals.values(), scene.pouring.position]
     for target in targets:
         target = np.asarray(target, dtype=float)
-        sim.reset([*layout["start"]["position"], 0.0])
+        sim.reset([*scene.start.position, 0.0])
         start = sim.state[:3]
         line = (target - start) / np.linalg.norm(target - start)
         worst = 0.0
@@ -92,22 +92,36 @@ def test_every_scene_position_is_reached_in_a_straight_line_within_joint_limits(
         assert worst < 0.02, f"strayed {worst:.3f} m off the line to {target}"
 
 
-def test_bad_action_and_bad_layout_are_named(sim, layout):
+def test_bad_action_and_bad_scene_are_named(sim):
     with pytest.raises(ValueError, match="action"):
         sim.step([0.0, 0.0, np.nan, 0.0])
-    broken = copy.deepcopy(layout)
+    # The scene the simulation needs is checked when it is loaded.
+    data = yaml.safe_load(DEFAULT_SCENE.read_text(encoding="utf-8"))
+    broken = copy.deepcopy(data)
     del broken["goals"]["red"]
-    with pytest.raises(ValueError, match="goals.red"):
-        check_layout(broken)
-    broken = copy.deepcopy(layout)
+    with pytest.raises(SceneError, match="goals.red"):
+        Scene.from_dict(broken)
+    broken = copy.deepcopy(data)
     broken["teleop"]["dt"] = "fast"
-    with pytest.raises(ValueError, match="teleop.dt"):
-        check_layout(broken)
+    with pytest.raises(SceneError, match="teleop.dt"):
+        Scene.from_dict(broken)
 
 
-def test_scene_shows_goals_where_the_layout_says(sim, layout):
+def test_scene_shows_goals_where_the_scene_says(sim, scene):
     for name, body in sim.bodies.goals.items():
         position, _ = p.getBasePositionAndOrientation(body, physicsClientId=sim.client)
-        np.testing.assert_allclose(position, layout["goals"][name], atol=1e-9)
+        np.testing.assert_allclose(position, scene.goals[name], atol=1e-9)
     sim.close()
     sim.close()  # idempotent
+
+
+def test_the_robot_imports_nothing_of_learning_or_the_study():
+    code = (
+        "import sys, casa_core.robot.keys, casa_core.robot.kinematics, casa_core.robot.scene, "
+        "casa_core.robot.sim, casa_core.robot.teleop\n"
+        "print(' '.join(m for m in sys.modules if m.startswith(('casa_core.irl', "
+        "'casa_core.library', 'casa_core.learning', 'casa_core.study', 'torch'))))"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == ""

@@ -2,13 +2,14 @@
 
 import numpy as np
 import pandas as pd
-import yaml
 
-from casa_core import logs
+from casa_core.config import load_config
+from casa_core.io import read_trial, validate_paths
+from casa_core.scene import load_scene
 from casa_core.study import protocol, simulate
 
-CONFIG = yaml.safe_load(open("config/ci.yaml"))
-SCENE = yaml.safe_load(open("config/scene.yaml"))
+CONFIG = load_config("config/config.yaml", "config/ci.yaml")
+SCENE = load_scene()
 
 
 def test_participant_parameters_depend_only_on_seed_and_index():
@@ -32,13 +33,13 @@ def test_misspecification_needs_every_beta_below_epsilon_at_the_end():
 
 def test_before_learning_writes_valid_logs_for_the_whole_protocol(tmp_path):
     settings = {**CONFIG["simulation"], "demonstrations": 1, "max_duration": 20.0}
-    stems = simulate.simulate_before_learning(0, SCENE, settings, tmp_path)
+    stems = simulate.simulate_before_learning(0, SCENE, simulation=settings, out_dir=tmp_path)
     assert len(stems) == 10 + 2  # familiarization, 3 + 3 + 3 conditions, 1 demo per task
-    assert logs.validate_paths([tmp_path]) == []
-    meta, _ = logs.read_trial(tmp_path / "unknown_goal_before_learning_CASA")
+    assert validate_paths([tmp_path]) == []
+    meta, _ = read_trial(tmp_path / "unknown_goal_before_learning_CASA")
     assert meta["notes"].startswith("evidence: commanded; misspecification detected: ")
     again = tmp_path / "again"
-    simulate.simulate_before_learning(0, SCENE, settings, again)
+    simulate.simulate_before_learning(0, SCENE, simulation=settings, out_dir=again)
     for stem in stems:  # the same seed gives the same logs, byte for byte
         for suffix in (".csv", ".json"):
             assert (again / stem.name).with_suffix(suffix).read_bytes() == stem.with_suffix(

@@ -1,22 +1,17 @@
-"""The pouring intent and the cup's orientation (casa_core.skills)."""
+"""The pouring intent and the cup's orientation (casa_core.skills, casa_core.rotation)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import torch
-import yaml
 
 from casa_core.robot.kinematics import ee_rotation
-from casa_core.skills import (
-    PouringIntent,
-    cup_axis,
-    cup_tilt_deg,
-    cup_upright,
-    end_effector_rotation,
-)
+from casa_core.rotation import end_effector_rotation
+from casa_core.scene import load_scene
+from casa_core.skills import PouringIntent, cup_axis, cup_tilt_deg, cup_upright
 
-SCENE = yaml.safe_load(open("config/scene.yaml", encoding="utf-8"))
+SCENE = load_scene()
 
 
 def as_t(value):
@@ -32,7 +27,7 @@ def test_rotation_is_the_arms_own_and_a_rotation(rot):
 
 
 def test_cup_upright_feature_and_tilt():
-    # NOTES section 1: u = 1 - (cup axis . world z): 0 upright, 1 on its side, 2 inverted;
+    # The original's u = 1 - (cup axis . world z): 0 upright, 1 on its side, 2 inverted;
     # the cup turns about a horizontal axis, so its tilt from upright is |rot|.
     u = cup_upright(as_t([0.0, np.pi / 2, np.pi])).numpy()
     np.testing.assert_allclose(u, [0.0, 1.0, 2.0], atol=1e-12)
@@ -43,12 +38,11 @@ def test_cup_upright_feature_and_tilt():
 
 def test_pouring_optimum_carries_upright_then_tilts_at_the_target():
     intent = PouringIntent.from_scene(SCENE)
-    start = np.array([*SCENE["start"]["position"], SCENE["start"]["rot"]])
-    trajectory = intent.optimal_trajectory(start, 15.0)
+    trajectory = intent.optimal_trajectory(SCENE.start_state, 15.0)
     assert trajectory.shape == (31, 4)
     end = trajectory[-1]
     assert np.linalg.norm(end[:3] - intent.target) < 0.01
-    assert cup_tilt_deg(end[3]) == pytest.approx(np.degrees(SCENE["pouring"]["tilt"]), abs=3.0)
+    assert cup_tilt_deg(end[3]) == pytest.approx(np.degrees(SCENE.pouring.tilt), abs=3.0)
     far = np.linalg.norm(trajectory[:, :3] - intent.target, axis=1) > 2 * intent.radius
     assert far.sum() >= 10  # the carry is long enough for this to say something
     assert (cup_tilt_deg(trajectory[far, 3]) < 5.0).all()  # no spilling on the way
@@ -69,10 +63,18 @@ def test_costs_add_up_along_a_trajectory():
     assert intent.prefix_cost(states) == pytest.approx(steps)
 
 
-def test_bad_scene_or_parameters():
-    with pytest.raises(ValueError, match="pouring"):
-        PouringIntent.from_scene({"goals": {}})
-    with pytest.raises(ValueError, match="radius"):
-        PouringIntent("pour", [0.5, 0.2, 0.3], 1.8, radius=0.0)
+def test_the_scene_gives_target_and_tilt():
+    intent = PouringIntent.from_scene(SCENE, "p", radius=0.1)
+    assert intent.target.tolist() == list(SCENE.pouring.position)
+    assert (intent.name, intent.tilt, intent.radius) == ("p", SCENE.pouring.tilt, 0.1)
+
+
+def test_bad_parameters_are_named():
+    with pytest.raises(ValueError, match="radius of intent 'pour' must be a positive number"):
+        PouringIntent("pour", [0.5, 0.2, 0.3], tilt=1.8, radius=0.0)
+    with pytest.raises(ValueError, match="spill_weight"):
+        PouringIntent("pour", [0.5, 0.2, 0.3], tilt=1.8, spill_weight=np.nan)
     with pytest.raises(ValueError, match="target"):
-        PouringIntent("pour", [0.5, 0.2], 1.8)
+        PouringIntent("pour", [0.5, 0.2], tilt=1.8)
+    with pytest.raises(ValueError, match="tilt of intent 'pour' must be finite"):
+        PouringIntent("pour", [0.5, 0.2, 0.3], tilt=np.inf)

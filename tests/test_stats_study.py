@@ -7,7 +7,9 @@ import pandas as pd
 import pytest
 
 from casa_core import cli
-from casa_core.stats import STATS_COLUMNS, analyze_study, anova, apa, condition_of, report_markdown
+from casa_core.stats import STATS_COLUMNS, analyze_study, anova, apa, report_markdown
+from casa_core.stats.study import CONDITION_ORDER
+from casa_core.vocabulary import condition_of
 
 ANALYSES = {
     "anova",
@@ -133,8 +135,9 @@ def test_table_has_the_contract_columns_and_analyses(table):
 
 
 def test_paper_degrees_of_freedom_with_11_participants(table):
-    # NOTES section 2: 3 methods x 11 = 33 observations, df (2, 33 - 3); 66 observations with
-    # a one-df task covariate, df (2, 66 - 3 - 1); 44 observations, df (1, 44 - 2 - 1).
+    # The paper's degrees of freedom (see docs/paper-to-code.md): 3 methods x 11 = 33
+    # observations, df (2, 33 - 3); 66 observations with a one-df task covariate,
+    # df (2, 66 - 3 - 1); 44 observations, df (1, 44 - 2 - 1).
     for metric in METRICS:
         h1 = _rows(table, hypothesis="H1", analysis="anova", metric=metric).iloc[0]
         h2 = _rows(table, hypothesis="H2", analysis="ancova", metric=metric, term="method")
@@ -238,6 +241,16 @@ def test_repeated_trials_are_averaged(trials):
 
 
 def test_condition_names():
+    # The stats' levels: the vocabulary's conditions, the CASA family first.
+    assert CONDITION_ORDER == [
+        "CASA",
+        "CASA before learning",
+        "CASA after learning",
+        "NA",
+        "PBA",
+        "NA after learning",
+        "PBA after learning",
+    ]
     assert condition_of("CASA", "before_learning") == "CASA before learning"
     assert condition_of("CASA", "after_learning") == "CASA after learning"
     assert condition_of("CASA", "no_misspecification") == "CASA"
@@ -288,12 +301,17 @@ def test_task_with_no_trials(trials):
 
 
 def test_bad_input_is_an_error(trials):
-    with pytest.raises(ValueError, match="column 'error' is missing"):
+    with pytest.raises(ValueError, match=r"missing column\(s\) 'error'"):
         analyze_study(trials.drop(columns=["error"]))
     wrong = trials.copy()
     wrong.loc[5, "method"] = "TELEPORT"
     with pytest.raises(ValueError, match="row 5: method 'TELEPORT'"):
         analyze_study(wrong, metrics=["error"])
+    practice = trials.copy()
+    practice.loc[0, "method"] = "TELEPORT"  # a familiarization trial: still not a method
+    assert practice.loc[0, "phase"] == "familiarization"
+    with pytest.raises(ValueError, match="row 0: method 'TELEPORT' in phase 'familiarization'"):
+        analyze_study(practice, metrics=["error"])
     as_read = trials.copy()
     as_read.loc[4, "method"] = np.nan  # what pandas makes of the text "NA" by default
     with pytest.raises(ValueError, match="keep_default_na=False"):
@@ -368,5 +386,18 @@ def test_cli_bad_input_exit_code(tmp_path, capsys):
         ]
     )
     assert code == 1
-    assert "column 'method' is missing" in capsys.readouterr().err
+    assert "missing column(s) 'method'" in capsys.readouterr().err
     assert not (tmp_path / "s.csv").exists()
+
+
+def test_stats_import_no_robot_study_or_learning():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, casa_core.stats; "
+        "print(sorted(m for m in sys.modules if m.split('.')[:2] in "
+        "(['casa_core', 'robot'], ['casa_core', 'study'], ['casa_core', 'learning'])))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -3,17 +3,18 @@
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
 
 from casa_core.assistant import Assistant
 from casa_core.intents import GoalIntent
 from casa_core.robot.keys import keys_to_action
+from casa_core.scene import load_scene
 from casa_core.study import likert, protocol
 from casa_core.study.arbitration_comparison import compare_arbitrations
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
 from casa_core.tasks import intended_trajectory
+from casa_core.vocabulary import QUESTIONS
 
-SCENE = yaml.safe_load(open("config/scene.yaml"))
+SCENE = load_scene()
 EXPERT = ParticipantParams(0.25, 0.003, 0.008, 0.0, 0.5, 0.0, 3)
 POPULATION = {
     "reaction_time": {"median": 0.35, "sigma": 0.25},
@@ -44,7 +45,7 @@ def drive(participant, reference, pull=None, limit=60.0, tick=0.05):
 @pytest.mark.parametrize("task", ["known_goal", "unknown_goal", "unknown_skill"])
 def test_expert_reaches_the_end_of_the_intended_trajectory(task):
     reference = intended_trajectory(task, SCENE)
-    participant = SimulatedParticipant(EXPERT, reference, np.random.default_rng(0))
+    participant = SimulatedParticipant(EXPERT, reference, rng=np.random.default_rng(0))
     state, t, _ = drive(participant, reference)
     assert participant.done
     assert np.linalg.norm(state[:3] - reference[-1, 1:4]) < 0.02
@@ -64,10 +65,12 @@ def test_a_robot_pulling_off_course_costs_the_participant_effort():
     # The participant counteracts: a steady pull away from the path needs more key presses.
     reference = intended_trajectory("unknown_goal", SCENE)
     params = draw_participants(1, POPULATION, np.random.default_rng(3))[0]
-    _, _, free = drive(SimulatedParticipant(params, reference, np.random.default_rng(1)), reference)
+    _, _, free = drive(
+        SimulatedParticipant(params, reference, rng=np.random.default_rng(1)), reference
+    )
     pull = np.array([0.05, 0.0, 0.0, 0.0])
     state, _, pulled = drive(
-        SimulatedParticipant(params, reference, np.random.default_rng(1)), reference, pull
+        SimulatedParticipant(params, reference, rng=np.random.default_rng(1)), reference, pull
     )
     assert pulled > free
     assert np.linalg.norm(state[:3] - reference[-1, 1:4]) < 0.1
@@ -111,19 +114,18 @@ def test_likert_scores_are_integers_on_the_scale_and_follow_the_experience():
     for scores in (good_scores, bad_scores):
         values = [v for s in scores for v in s.values()]
         assert all(isinstance(v, int) and 1 <= v <= 7 for v in values)
-    for question in likert.QUESTIONS:
+    for question in QUESTIONS:
         assert np.mean([s[question] for s in good_scores]) > np.mean(
             [s[question] for s in bad_scores]
         )
 
 
 def test_arbitration_comparison_belief_goes_to_one_while_confidence_stays_low():
-    # Paper Fig. alpha_methods on our layout with the paper's distance-sum cost (C3).
+    # Paper Fig. alpha_methods on our scene with the paper's distance-sum cost (C3).
     intents = [
-        GoalIntent(name, SCENE["goals"][name], cost="distance_sum") for name in ("green", "purple")
+        GoalIntent(name, SCENE.goals[name], cost="distance_sum") for name in ("green", "purple")
     ]
-    start = np.array([*SCENE["start"]["position"], 0.0])
-    trajectory = GoalIntent("red", SCENE["goals"]["red"]).optimal_trajectory(start, 15.0)
+    trajectory = GoalIntent("red", SCENE.goals["red"]).optimal_trajectory(SCENE.start_state, 15.0)
     table = compare_arbitrations(Assistant(intents), trajectory)
     assert list(table.columns) == [
         "t",

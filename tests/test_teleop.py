@@ -8,34 +8,34 @@ import textwrap
 
 import pybullet as p
 import pytest
-import yaml
 
-from casa_core import logs
-from casa_core.cli import build_parser
+from casa_core.cli import build_parser, main
+from casa_core.io import read_trial, validate_paths
 from casa_core.robot import teleop
-from casa_core.study.trial import ScriptedKeys, run_teleop
+from casa_core.scene import load_scene
+from casa_core.study.key_sources import ScriptedKeys
+from casa_core.study.teleop_session import run_teleop
 
 
 @pytest.fixture(scope="module")
-def layout():
-    with open("config/scene.yaml", encoding="utf-8") as handle:
-        return yaml.safe_load(handle)
+def scene():
+    return load_scene()
 
 
-def test_headless_teleop_writes_a_valid_log_and_never_overwrites(layout, tmp_path):
+def test_headless_teleop_writes_a_valid_log_and_never_overwrites(scene, tmp_path):
     script = ScriptedKeys([(1.0, ["x+", "z-"]), (0.5, ["rot+"])])
     stem = run_teleop(
-        layout, "unknown_skill", "PBA", "h7", tmp_path, gui=False, key_source=script, countdown=0
+        scene, "unknown_skill", "PBA", "h7", tmp_path, gui=False, key_source=script, countdown=0
     )
     assert stem == tmp_path / "unknown_skill_before_learning_PBA"
-    assert logs.validate_paths([tmp_path]) == []
-    meta, frame = logs.read_trial(stem)
+    assert validate_paths([tmp_path]) == []
+    meta, frame = read_trial(stem)
     assert meta["participant"] == "h7" and meta["source"] == "simulated"
     assert "started_at" in meta
     assert (frame["keys"][:20] == "x+ z-").all() and (frame["keys"][20:30] == "rot+").all()
     with pytest.raises(FileExistsError, match="never overwritten"):
         run_teleop(
-            layout, "unknown_skill", "PBA", "h7", tmp_path, gui=False, key_source=ScriptedKeys([])
+            scene, "unknown_skill", "PBA", "h7", tmp_path, gui=False, key_source=ScriptedKeys([])
         )
 
 
@@ -48,10 +48,10 @@ def test_headless_teleop_writes_a_valid_log_and_never_overwrites(layout, tmp_pat
     ],
 )
 def test_teleop_refuses_a_trial_it_could_not_log_before_opening_a_window(
-    layout, tmp_path, task, method, phase, rule
+    scene, tmp_path, task, method, phase, rule
 ):
     with pytest.raises(ValueError, match=rule):
-        run_teleop(layout, task, method, "h1", tmp_path, phase=phase, gui=True)
+        run_teleop(scene, task, method, "h1", tmp_path, phase=phase, gui=True)
     assert not list(tmp_path.iterdir())
 
 
@@ -82,16 +82,43 @@ def test_cli_has_teleop_and_bench():
     args = parser.parse_args(
         ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "a", "--out", "d"]
     )
-    assert args.func.__name__ == "_teleop" and args.scene == "config/scene.yaml"
+    assert args.func.__name__ == "_teleop" and args.scene is None  # the package's scene
     assert parser.parse_args(["bench", "--json"]).json
+
+
+def test_teleop_help_works_from_any_directory(tmp_path):
+    run = subprocess.run(
+        [sys.executable, "-m", "casa_core.cli", "teleop", "--help"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "--scene" in run.stdout
+
+
+@pytest.mark.parametrize("command", ["teleop", "bench"])
+def test_a_bad_scene_file_is_named_without_a_traceback(tmp_path, capsys, command):
+    bad = tmp_path / "scene.yaml"
+    bad.write_text("start: {position: [0, 0], rot: 0}\n", encoding="utf-8")
+    args = [command, "--scene", str(bad)]
+    if command == "teleop":
+        args += ["--task", "known_goal", "--method", "NA", "--participant", "a"]
+        args += ["--out", str(tmp_path / "logs")]
+    assert main(args) == 2
+    error = capsys.readouterr().err
+    assert f"casa {command}: {bad}: " in error and "Traceback" not in error
+    assert not (tmp_path / "logs").exists()
 
 
 WINDOW_SCRIPT = textwrap.dedent(
     """
     import sys
     import pybullet as p
-    import yaml
-    from casa_core.study.trial import ScriptedKeys, run_teleop
+    from casa_core.scene import load_scene
+    from casa_core.study.key_sources import ScriptedKeys
+    from casa_core.study.teleop_session import run_teleop
 
     class KeysAndKeyboard(ScriptedKeys):
         # Scripted keys, while polling the window's keyboard as the real source does.
@@ -99,10 +126,9 @@ WINDOW_SCRIPT = textwrap.dedent(
             assert isinstance(p.getKeyboardEvents(), dict)
             return super().keys(t, state)
 
-    with open("config/scene.yaml", encoding="utf-8") as handle:
-        layout = yaml.safe_load(handle)
+    scene = load_scene()
     source = KeysAndKeyboard([(0.5, ["y+"]), (0.5, ["z+"])])
-    run_teleop(layout, "known_goal", "CASA", "w1", sys.argv[1], key_source=source,
+    run_teleop(scene, "known_goal", "CASA", "w1", sys.argv[1], key_source=source,
                countdown=1, realtime=False)
     """
 )
@@ -146,23 +172,23 @@ def test_teleop_in_a_real_window_under_xvfb(tmp_path):
         server.terminate()
         server.wait(timeout=10)
     stem = tmp_path / "known_goal_no_misspecification_CASA"
-    assert logs.validate_paths([tmp_path]) == []
-    _, frame = logs.read_trial(stem)
+    assert validate_paths([tmp_path]) == []
+    _, frame = read_trial(stem)
     assert list(frame["keys"][:10]) == ["y+"] * 10
 
 
-def test_learned_intent_files_join_the_known_goals_after_learning(layout, tmp_path):
-    from casa_core.irl import IRLConfig
+def test_learned_intent_files_join_the_known_goals_after_learning(scene, tmp_path):
+    from casa_core.bench import untrained_neural_intent
+    from casa_core.learning import IRLConfig
     from casa_core.library import save_intent
     from casa_core.planning import PlannerConfig
-    from casa_core.robot.bench import untrained_neural_intent
-    from casa_core.study.trial import trial_intents
+    from casa_core.study.closed_loop import trial_intents
 
     # A short planner keeps the test fast; the log, not the plan, is under test here.
     quick = PlannerConfig(iterations=20, warm_iterations=5)
     path = save_intent(
         tmp_path / "library",
-        untrained_neural_intent(layout, seed=1, planner=quick),
+        untrained_neural_intent(scene, seed=1, planner=quick),
         task="unknown_goal",
         participant="h1",
         seed=1,
@@ -170,11 +196,11 @@ def test_learned_intent_files_join_the_known_goals_after_learning(layout, tmp_pa
         history=[],
         config=IRLConfig(),
     )
-    intents = trial_intents(layout, [path])
+    intents = trial_intents(scene, [path])
     assert [intent.name for intent in intents] == ["green", "purple", "neural"]
     script = ScriptedKeys([(1.0, ["y+"])])
     stem = run_teleop(
-        layout,
+        scene,
         "unknown_goal",
         "CASA",
         "h1",
@@ -185,33 +211,34 @@ def test_learned_intent_files_join_the_known_goals_after_learning(layout, tmp_pa
         countdown=0,
         intents=intents,
     )
-    meta, frame = logs.read_trial(stem)
+    meta, frame = read_trial(stem)
     assert meta["intents"] == ["green", "purple", "neural"]
     assert frame["beta:neural"].iloc[-1] > 0
     (tmp_path / "broken.intent.json").write_text("{", encoding="utf-8")
     with pytest.raises(ValueError, match="broken.intent.json"):
-        trial_intents(layout, [tmp_path / "broken.intent.json"])
+        trial_intents(scene, [tmp_path / "broken.intent.json"])
 
 
 @pytest.mark.parametrize(("driven_to", "detected"), [("unknown_goal", True), ("known_goal", False)])
 def test_misspecification_in_teleop_asks_for_and_records_demonstrations(
-    layout, tmp_path, driven_to, detected
+    scene, tmp_path, driven_to, detected
 ):
-    # Issue 5, item 3: when no known intent explains the person, casa teleop asks for
-    # demonstrations and records them. In an Unknown Goal trial the expert drives to
+    # When no known intent explains the person, casa teleop asks for demonstrations and
+    # records them. In an Unknown Goal trial the expert drives to
     # the end of `driven_to`: to red, which no known intent explains, or to green,
     # which one does.
-    from casa_core.study.trial import WaypointKeys, teleop_session
+    from casa_core.study.key_sources import WaypointKeys
+    from casa_core.study.teleop_session import teleop_session
     from casa_core.tasks import task_waypoints
 
     stems, found = teleop_session(
-        layout,
+        scene,
         "unknown_goal",
         "CASA",
         "h2",
         tmp_path,
         n_demonstrations=2,
-        make_key_source=lambda: WaypointKeys(task_waypoints(driven_to, layout)[1:]),
+        make_key_source=lambda: WaypointKeys(task_waypoints(driven_to, scene)[1:]),
         gui=False,
         countdown=0,
         realtime=False,
@@ -225,13 +252,13 @@ def test_misspecification_in_teleop_asks_for_and_records_demonstrations(
         "unknown_goal_demonstration_NA_1",
         "unknown_goal_demonstration_NA_2",
     ]
-    meta, frame = logs.read_trial(stems[1])
+    meta, frame = read_trial(stems[1])
     assert (meta["phase"], meta["method"], meta["source"]) == ("demonstration", "NA", "simulated")
     assert (frame["alpha"] == 1.0).all()  # demonstrations are unassisted
 
 
 @pytest.mark.parametrize("evidence", [None, "executed"])
-def test_the_log_says_what_inference_observed(layout, tmp_path, evidence):
+def test_the_log_says_what_inference_observed(scene, tmp_path, evidence):
     # `casa teleop --evidence` reaches the assistant, and the log's notes record it
     # (the Assistant's default, "commanded", when not given).
     args = ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "a"]
@@ -241,7 +268,7 @@ def test_the_log_says_what_inference_observed(layout, tmp_path, evidence):
     assert parsed.evidence == evidence
     options = {"evidence": evidence} if evidence else None
     stem = run_teleop(
-        layout,
+        scene,
         "known_goal",
         "CASA",
         "h3",
@@ -251,7 +278,7 @@ def test_the_log_says_what_inference_observed(layout, tmp_path, evidence):
         countdown=0,
         assistant_options=options,
     )
-    meta, _ = logs.read_trial(stem)
+    meta, _ = read_trial(stem)
     assert meta["notes"] == f"evidence: {evidence or 'commanded'}"
     with pytest.raises(SystemExit):
         build_parser().parse_args([*args, "--out", "d", "--evidence", "robot"])

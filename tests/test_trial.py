@@ -2,33 +2,30 @@
 
 Expected numbers come from the key map (0.05 m/s), the control tick (0.05 s), the
 inference period (0.5 s) and PBA's arbitration alpha = min(1, d / D) with D = 0.55 m
-(NOTES section 1); logs are checked by the casa-trial/1 reader itself.
+(the original implementation's, docs/paper-to-code.md); logs are checked by the
+casa-trial/1 reader itself.
 """
+
+import dataclasses
 
 import numpy as np
 import pytest
-import yaml
 
-from casa_core import logs
+from casa_core.io import read_trial, validate_paths
+from casa_core.scene import load_scene
+from casa_core.study.closed_loop import default_phase, known_goal_intents, run_trial
+from casa_core.study.key_sources import ScriptedKeys, WaypointKeys
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant
-from casa_core.study.trial import (
-    ScriptedKeys,
-    WaypointKeys,
-    default_phase,
-    known_goal_intents,
-    run_trial,
-)
 from casa_core.tasks import intended_trajectory, task_waypoints
 
 
 @pytest.fixture(scope="module")
-def layout():
-    with open("config/scene.yaml", encoding="utf-8") as handle:
-        return yaml.safe_load(handle)
+def scene():
+    return load_scene()
 
 
-def _expert(task, layout):
-    return WaypointKeys(task_waypoints(task, layout)[1:])
+def _expert(task, scene):
+    return WaypointKeys(task_waypoints(task, scene)[1:])
 
 
 CASES = [("familiarization", "NA")] + [
@@ -39,14 +36,14 @@ CASES = [("familiarization", "NA")] + [
 
 
 @pytest.mark.parametrize(("task", "method"), CASES)
-def test_scripted_trial_writes_a_valid_log(task, method, layout, tmp_path):
+def test_scripted_trial_writes_a_valid_log(task, method, scene, tmp_path):
     result = run_trial(
-        layout, task, method, _expert(task, layout), participant="s1", max_duration=20, seed=3
+        scene, task, method, _expert(task, scene), participant="s1", max_duration=20, seed=3
     )
     stem = tmp_path / "s1" / f"{task}_{method}"
     result.write(stem)
-    assert logs.validate_paths([tmp_path]) == []
-    meta, frame = logs.read_trial(stem)
+    assert validate_paths([tmp_path]) == []
+    meta, frame = read_trial(stem)
     assert meta["task"] == task and meta["method"] == method
     assert meta["phase"] == default_phase(task)
     assert meta["intents"] == ["green", "purple"] and meta["seed"] == 3
@@ -58,25 +55,25 @@ def test_scripted_trial_writes_a_valid_log(task, method, layout, tmp_path):
     if method == "NA":
         assert (frame["alpha"] == 1).all()
         # Direct teleoperation of the scripted expert ends at the task's last waypoint.
-        final = task_waypoints(task, layout)[-1]
+        final = task_waypoints(task, scene)[-1]
         last = frame.iloc[-1]
         np.testing.assert_allclose(last[["x", "y", "z"]].to_numpy(float), final[:3], atol=6e-3)
         assert last["rot"] == pytest.approx(final[3], abs=0.06)
 
 
-def test_held_key_for_one_second_moves_five_centimetres(layout):
+def test_held_key_for_one_second_moves_five_centimetres(scene):
     source = ScriptedKeys([(1.0, ["x+"]), (0.5, [])])
-    frame = run_trial(layout, "known_goal", "NA", source, participant="s").frame
+    frame = run_trial(scene, "known_goal", "NA", source, participant="s").frame
     assert source.done
     assert (frame["keys"][:20] == "x+").all() and (frame["keys"][20:] == "").all()
     # 20 ticks of 0.05 s at 0.05 m/s = 0.05 m along x.
-    moved = frame.iloc[-1][["x", "y", "z"]].to_numpy(float) - layout["start"]["position"]
+    moved = frame.iloc[-1][["x", "y", "z"]].to_numpy(float) - scene.start_state[:3]
     np.testing.assert_allclose(moved, [0.05, 0, 0], atol=2e-3)
 
 
-def test_inference_runs_twice_per_second(layout):
+def test_inference_runs_twice_per_second(scene):
     frame = run_trial(
-        layout, "known_goal", "CASA", _expert("known_goal", layout), participant="s"
+        scene, "known_goal", "CASA", _expert("known_goal", scene), participant="s"
     ).frame
     early = frame[frame["t"] < 0.5 - 1e-9]
     assert (early["beta:green"] == 0).all() and (early["belief:green"] == 0.5).all()
@@ -85,11 +82,11 @@ def test_inference_runs_twice_per_second(layout):
     np.testing.assert_allclose(np.mod(changed * 2, 1.0), 0.0, atol=1e-9)
 
 
-def test_pba_arbitrates_by_the_distance_to_the_predicted_goal(layout):
+def test_pba_arbitrates_by_the_distance_to_the_predicted_goal(scene):
     frame = run_trial(
-        layout, "known_goal", "PBA", _expert("known_goal", layout), participant="s"
+        scene, "known_goal", "PBA", _expert("known_goal", scene), participant="s"
     ).frame
-    green = np.asarray(layout["goals"]["green"])
+    green = scene.goal("green")
     # At an inference tick the alpha logged is min(1, d / 0.55) for the state of that row.
     inference = frame[np.isclose(np.mod(frame["t"] * 2, 1.0), 0) & (frame["t"] > 0)]
     late = inference.iloc[-1]
@@ -99,22 +96,22 @@ def test_pba_arbitrates_by_the_distance_to_the_predicted_goal(layout):
     assert late["alpha"] < 0.5
 
 
-def test_casa_before_learning_leaves_the_user_in_control_of_the_unknown_goal(layout):
+def test_casa_before_learning_leaves_the_user_in_control_of_the_unknown_goal(scene):
     """The paper's Fig. 3 (middle): neither known goal explains the motion, alpha stays 1."""
     frame = run_trial(
-        layout, "unknown_goal", "CASA", _expert("unknown_goal", layout), participant="s"
+        scene, "unknown_goal", "CASA", _expert("unknown_goal", scene), participant="s"
     ).frame
     assert (frame["alpha"] == 1).all()
-    red = np.asarray(layout["goals"]["red"])
+    red = scene.goal("red")
     np.testing.assert_allclose(frame.iloc[-1][["x", "y", "z"]].to_numpy(float), red, atol=6e-3)
 
 
-def test_belief_method_runs_but_is_not_a_log_method(layout, tmp_path):
+def test_belief_method_runs_but_is_not_a_log_method(scene, tmp_path):
     result = run_trial(
-        layout,
+        scene,
         "unknown_goal",
         "BELIEF",
-        _expert("unknown_goal", layout),
+        _expert("unknown_goal", scene),
         participant="s",
         max_duration=3,
     )
@@ -124,7 +121,7 @@ def test_belief_method_runs_but_is_not_a_log_method(layout, tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_simulated_participant_is_a_key_source(layout):
+def test_simulated_participant_is_a_key_source(scene):
     params = ParticipantParams(
         reaction_time=0.2,
         perception_noise=0.002,
@@ -134,17 +131,17 @@ def test_simulated_participant_is_a_key_source(layout):
         wrong_key=0.0,
         max_keys=3,
     )
-    reference = intended_trajectory("known_goal", layout)
-    participant = SimulatedParticipant(params, reference, np.random.default_rng(5))
-    frame = run_trial(layout, "known_goal", "CASA", participant, participant="p1").frame
+    reference = intended_trajectory("known_goal", scene)
+    participant = SimulatedParticipant(params, reference, rng=np.random.default_rng(5))
+    frame = run_trial(scene, "known_goal", "CASA", participant, participant="p1").frame
     assert participant.done
-    green = np.asarray(layout["goals"]["green"])
+    green = scene.goal("green")
     assert np.linalg.norm(frame.iloc[-1][["x", "y", "z"]].to_numpy(float) - green) < 0.03
 
 
-def test_bad_inputs_are_named(layout):
+def test_bad_inputs_are_named(scene):
     with pytest.raises(ValueError, match="method 'XX'"):
-        run_trial(layout, "known_goal", "XX", ScriptedKeys([]), participant="s")
+        run_trial(scene, "known_goal", "XX", ScriptedKeys([]), participant="s")
     with pytest.raises(ValueError, match="task 'flying'"):
         default_phase("flying")
     with pytest.raises(ValueError, match="'jump'"):
@@ -152,7 +149,7 @@ def test_bad_inputs_are_named(layout):
     with pytest.raises(ValueError, match="entry 0"):
         ScriptedKeys([(-1.0, ["x+"])])
     with pytest.raises(ValueError, match="goals has no orange"):
-        known_goal_intents(layout, ["green", "orange"])
-    odd_tick = {**layout, "teleop": {**layout["teleop"], "dt": 0.3}}
+        known_goal_intents(scene, ["green", "orange"])
+    odd_tick = dataclasses.replace(scene, teleop=dataclasses.replace(scene.teleop, dt=0.3))
     with pytest.raises(ValueError, match="teleop.dt"):
         run_trial(odd_tick, "known_goal", "NA", ScriptedKeys([]), participant="s")

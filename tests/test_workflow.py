@@ -35,15 +35,22 @@ def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess:
     )
 
 
-@pytest.fixture
-def repo(tmp_path):
-    """The workflow and its configs copied next to a data/raw with two synthetic datasets."""
+def copy_workflow(folder: Path) -> Path:
+    """The Snakefile, the workflow and the configs copied into ``folder``."""
+    folder.mkdir(parents=True, exist_ok=True)
     for name in ("Snakefile", "workflow", "config"):
         source = ROOT / name
         if source.is_dir():
-            shutil.copytree(source, tmp_path / name)
+            shutil.copytree(source, folder / name)
         else:
-            shutil.copy(source, tmp_path / name)
+            shutil.copy(source, folder / name)
+    return folder
+
+
+@pytest.fixture
+def repo(tmp_path):
+    """The workflow and its configs copied next to a data/raw with two synthetic datasets."""
+    copy_workflow(tmp_path)
     write_dataset(tmp_path / "data" / "raw" / "pilot", participants=("p01", "p02"))
     conditions = [("known_goal", m, "no_misspecification") for m in ("NA", "CASA")]
     write_dataset(
@@ -139,20 +146,6 @@ def test_a_bad_file_stops_its_dataset_only_and_every_problem_is_listed(repo):
     assert "p02/known_goal_NA_no_misspecification" in trials
 
 
-@pytest.mark.parametrize(
-    "args, message",
-    [
-        (["--config", "allow_invalid=maybe"], "allow_invalid"),
-        (["--config", "alow_invalid=true"], "alow_invalid"),
-    ],
-)
-def test_bad_config_is_refused_naming_the_key(repo, args, message):
-    result = snakemake(repo, "--dry-run", *args)
-    assert result.returncode != 0
-    text = result.stdout + result.stderr
-    assert message in text and "validating config" in text
-
-
 def test_a_badly_named_dataset_folder_is_refused(repo):
     (repo / "data" / "raw" / "my data").mkdir()
     result = snakemake(repo, "--dry-run")
@@ -222,6 +215,7 @@ def test_config_overrides_reach_the_package_commands(repo):
     assert (repo / config_file).read_text() == (ROOT / config_file).read_text()  # never edited
     assert snakemake(repo, "--dry-run").returncode == 0
     assert yaml.safe_load(effective.read_text())["simulation"]["evidence"] == "commanded"
+    assert effective.stat().st_mode & 0o777 == 0o644  # written by casa_core.io.atomic
     # An unchanged config is not rewritten, so that it reruns nothing.
     before = effective.stat().st_mtime_ns
     assert snakemake(repo, "--dry-run").returncode == 0

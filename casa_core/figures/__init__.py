@@ -8,14 +8,15 @@ a :class:`matplotlib.figure.Figure`; :func:`save_figure` writes it as vector PDF
 - :func:`likert_figure` -- ``likert.csv``: the three questions per task
 - :func:`arbitration_figure` -- ``arbitration.csv``: belief, confidence and three alphas
 - :func:`case_study_figure` -- ``steps.csv``: confidence and alpha over time per task
-- :func:`scene_figure` -- ``config/scene.yaml``: the arm and scene, pybullet-rendered
+- :func:`scene_figure` -- a rendering of the arm and scene
+  (:func:`casa_core.robot.render.render_scene`), with its legend
 """
 
 from casa_core.figures.arbitration import arbitration_figure
 from casa_core.figures.case_study import case_study_figure
 from casa_core.figures.likert import likert_figure
 from casa_core.figures.objective import objective_figure
-from casa_core.figures.scene import render_scene, scene_figure
+from casa_core.figures.scene import scene_figure
 from casa_core.figures.style import save_figure
 
 __all__ = [
@@ -23,7 +24,6 @@ __all__ = [
     "case_study_figure",
     "likert_figure",
     "objective_figure",
-    "render_scene",
     "save_figure",
     "scene_figure",
 ]

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from casa_core.figures import style
+from casa_core.vocabulary import CONDITIONS
 
 
 def participant_means(frame: pd.DataFrame, keys: Sequence[str], value: str) -> pd.DataFrame:
@@ -68,7 +69,7 @@ def draw_grouped_bars(
         ``(group, condition) -> (x centre, top of the bar's data)``, where the top is the
         highest of the error bar and the points: where a bracket may start.
     """
-    present = [c for c in style.CONDITIONS if c in set(points["condition"])]
+    present = [c for c in CONDITIONS if c in set(points["condition"])]
     # Room for four bars (the misspecified tasks' conditions) in every group, so bars keep
     # one width across panels and figures, also when a dataset has fewer conditions.
     bar_width = width / max(4, _max_conditions_per_group(points, group))
@@ -164,7 +165,7 @@ def condition_legend(fig, axes) -> None:
     for ax in axes:
         for handle, name in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(name, handle)
-    order = [c for c in style.CONDITIONS if c in handles]
+    order = [c for c in CONDITIONS if c in handles]
     fig.legend(
         [handles[c] for c in order],
         order,

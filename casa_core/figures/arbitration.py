@@ -11,6 +11,7 @@ from __future__ import annotations
 import pandas as pd
 from matplotlib.figure import Figure
 
+from casa_core import tables
 from casa_core.figures import style
 
 #: alpha column of arbitration.csv -> (legend label, colour, line style). The distance and
@@ -40,8 +41,8 @@ def prepare_arbitration(arbitration: pd.DataFrame) -> tuple[pd.DataFrame, pd.Dat
         If a column is missing, a value is not a number, or the alphas of one time
         differ between intents' rows (they are properties of the time, not the intent).
     """
-    style.require_columns(arbitration, COLUMNS, "arbitration")
-    frame = style.numeric_columns(
+    tables.require_columns(arbitration, COLUMNS, "arbitration")
+    frame = tables.numeric_columns(
         arbitration[COLUMNS], ["t", "belief", "beta", *ARBITRATIONS], "arbitration"
     )
     alphas = frame.groupby("t", sort=True)[list(ARBITRATIONS)]

@@ -4,18 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import yaml
-
 from casa_core.datasets import read_table
 from casa_core.figures import style
 
-#: Figure name -> the input files it reads (keyword of :func:`build_figure`).
+#: Figure name -> its inputs (keywords of :func:`build_figure`): the paths of the tables it
+#: reads; for the scene, the rendered image (an array).
 INPUTS: dict[str, tuple[str, ...]] = {
     "objective": ("trials", "stats"),
     "likert": ("likert",),
     "arbitration": ("arbitration",),
     "case_study": ("steps",),
-    "scene": ("scene",),
+    "scene": ("image",),
 }
 
 
@@ -32,7 +31,8 @@ def build_figure(name: str, out: str | Path, **inputs) -> list[Path]:
     **inputs
         Paths of the input tables by the names in :data:`INPUTS` (``stats`` is optional
         for ``objective``), plus the options ``epsilon`` (arbitration, case_study) and
-        ``participant`` (case_study).
+        ``participant`` (case_study). The scene's ``image`` is rendered by the caller
+        (:func:`casa_core.robot.render.render_scene`), since figures know no robots.
 
     Returns
     -------
@@ -58,7 +58,5 @@ def build_figure(name: str, out: str | Path, **inputs) -> list[Path]:
             read_table(inputs["steps"]), participant=inputs.get("participant"), epsilon=epsilon
         )
     else:
-        with open(inputs["scene"], encoding="utf-8") as handle:
-            scene = yaml.safe_load(handle)
-        return style.save_figure(figures.scene_figure(scene), out, formats=("png",))
+        return style.save_figure(figures.scene_figure(inputs["image"]), out, formats=("png",))
     return style.save_figure(fig, out)

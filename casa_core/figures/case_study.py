@@ -11,7 +11,9 @@ from __future__ import annotations
 import pandas as pd
 from matplotlib.figure import Figure
 
+from casa_core import tables
 from casa_core.figures import style
+from casa_core.vocabulary import TASK_LABELS
 
 COLUMNS = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
 
@@ -48,7 +50,7 @@ def prepare_steps(steps: pd.DataFrame, participant: str | None = None) -> tuple[
         If a column is missing, the participant is absent, a value is not a number, or
         one run has two rows for the same time and intent.
     """
-    style.require_columns(steps, COLUMNS, "steps")
+    tables.require_columns(steps, COLUMNS, "steps")
     names = sorted(steps["participant"].astype(str).unique())
     if not names:
         raise ValueError("steps: the table has no rows")
@@ -56,8 +58,8 @@ def prepare_steps(steps: pd.DataFrame, participant: str | None = None) -> tuple[
     if participant not in names:
         raise ValueError(f"steps: no rows for participant {participant!r}; have {names}")
     rows = steps[steps["participant"].astype(str) == participant]
-    rows = rows[rows["task"].isin(list(style.TASK_LABELS))].copy()
-    rows = style.numeric_columns(rows, ["t", "alpha", "beta", "belief"], "steps")
+    rows = rows[rows["task"].isin(list(style.SHOWN_TASKS))].copy()
+    rows = tables.numeric_columns(rows, ["t", "alpha", "beta", "belief"], "steps")
     rows = style.label_conditions(rows, "steps")
     twice = rows.duplicated(["task", "condition", "t", "intent"], keep=False)
     if twice.any():
@@ -98,7 +100,7 @@ def case_study_figure(
         task to its three axes. Panels without data carry a note.
     """
     rows, participant = prepare_steps(steps, participant)
-    tasks = [t for t in style.TASK_LABELS if t in set(rows["task"])]
+    tasks = [t for t in style.SHOWN_TASKS if t in set(rows["task"])]
     if not tasks:
         raise ValueError(f"steps: participant {participant!r} has no rows of a study task")
     colours = style.intent_colours(rows["intent"].dropna().astype(str).unique())
@@ -128,7 +130,7 @@ def case_study_figure(
                 _confidence_panel(ax, run, colours, epsilon, 1.12 * top if top > 0 else 1.0)
             _alpha_panel(alpha_ax, in_task)
             before.annotate(
-                style.TASK_LABELS[task],
+                TASK_LABELS[task],
                 (0.0, 0.5),
                 xycoords="axes fraction",
                 # Left of the tick labels and the y label, whatever the axes' width.

@@ -10,7 +10,9 @@ from __future__ import annotations
 import pandas as pd
 from matplotlib.figure import Figure
 
+from casa_core import tables
 from casa_core.figures import _bars, style
+from casa_core.vocabulary import QUESTION_LABELS, TASK_LABELS
 
 SCALE = (1, 7)
 
@@ -23,17 +25,17 @@ def prepare_likert(likert: pd.DataFrame) -> pd.DataFrame:
     ValueError
         Naming the row, if a question is unknown or a score is not an integer 1-7.
     """
-    style.require_columns(
+    tables.require_columns(
         likert, ["participant", "task", "method", "phase", "question", "score"], "likert"
     )
-    rows = likert[likert["task"].isin(list(style.TASK_LABELS))].copy()
+    rows = likert[likert["task"].isin(list(style.SHOWN_TASKS))].copy()
     scores = pd.to_numeric(rows["score"], errors="coerce")
     conditions = []
     for index, row in rows.iterrows():
-        if row["question"] not in style.LIKERT_QUESTIONS:
+        if row["question"] not in QUESTION_LABELS:
             raise ValueError(
                 f"likert row {index}: question {row['question']!r} is not one of "
-                f"{', '.join(style.LIKERT_QUESTIONS)}"
+                f"{', '.join(QUESTION_LABELS)}"
             )
         score = scores[index]
         if pd.isna(score) or not (score == round(score) and SCALE[0] <= score <= SCALE[1]):
@@ -42,7 +44,7 @@ def prepare_likert(likert: pd.DataFrame) -> pd.DataFrame:
                 f"from {SCALE[0]} to {SCALE[1]}"
             )
         try:
-            conditions.append(style.condition_of(str(row["method"]), str(row["phase"])))
+            conditions.append(style.row_condition(str(row["method"]), str(row["phase"])))
         except ValueError as error:
             raise ValueError(f"likert row {index}: {error}") from None
     rows["score"] = scores.astype(float)
@@ -68,11 +70,12 @@ def likert_figure(likert: pd.DataFrame, title: str | None = None) -> Figure:
         survey rows keeps its panel with a note.
     """
     rows = prepare_likert(likert)
-    questions = list(style.LIKERT_QUESTIONS)
+    questions = list(QUESTION_LABELS)
     with style.context():
         fig = style.new_figure(7.0, 2.3)
-        axes = fig.subplots(1, len(style.TASK_LABELS), sharey=True)
-        for ax, (task, task_label) in zip(axes, style.TASK_LABELS.items(), strict=True):
+        axes = fig.subplots(1, len(style.SHOWN_TASKS), sharey=True)
+        for ax, task in zip(axes, style.SHOWN_TASKS, strict=True):
+            task_label = TASK_LABELS[task]
             ax.set_title(task_label)
             in_task = rows[rows["task"] == task]
             if in_task.empty:
@@ -80,7 +83,7 @@ def likert_figure(likert: pd.DataFrame, title: str | None = None) -> Figure:
                 continue
             points = _bars.participant_means(in_task, ["question", "condition"], "score")
             _bars.draw_grouped_bars(ax, points, "question", questions, "score", show_points=False)
-            ax.set_xticklabels([style.LIKERT_QUESTIONS[q] for q in questions])
+            ax.set_xticklabels([QUESTION_LABELS[q] for q in questions])
             ax.set_ylim(SCALE[0], SCALE[1] + 0.2)
             ax.set_yticks(range(SCALE[0], SCALE[1] + 1))
         for ax in axes:

@@ -15,8 +15,17 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from casa_core import tables
 from casa_core.figures import _bars, style
-from casa_core.study import protocol
+from casa_core.vocabulary import (
+    CASA_AFTER_LEARNING,
+    CASA_BEFORE_LEARNING,
+    CONDITIONS,
+    TASK_CONDITIONS,
+    TASK_LABELS,
+    UNANALYSED_PHASES,
+    UNKNOWN_TASKS,
+)
 
 #: The panels: trials.csv column, axis label (with units), and the names the stats table
 #: may give the metric, in order of preference (the paper tests effort as relative effort).
@@ -26,15 +35,12 @@ METRICS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("relative_effort", "Effort (key presses / NA)", ("relative_effort", "effort")),
 )
 
-#: Phases whose trials are not part of the comparison of methods.
-EXCLUDED_PHASES = protocol.UNANALYSED_PHASES
-
 #: How the stats table may name a set of tasks pooled in one analysis (the ANCOVA over
 #: the two misspecified tasks).
 POOLED_TASKS = {
-    "misspecified": ("unknown_goal", "unknown_skill"),
-    "unknown": ("unknown_goal", "unknown_skill"),
-    "all": tuple(style.TASK_LABELS),
+    "misspecified": UNKNOWN_TASKS,
+    "unknown": UNKNOWN_TASKS,
+    "all": style.SHOWN_TASKS,
 }
 
 SIGNIFICANCE = 0.05
@@ -56,13 +62,11 @@ def _condition_key(text: str) -> str:
 
 
 #: Condition names as the stats table may spell them -> the figure's condition names.
-_CONDITION_ALIASES = {_condition_key(c): c for c in style.CONDITIONS} | {
-    "casa before": "CASA before learning",
-    "casa after": "CASA after learning",
-    "casa bl": "CASA before learning",
-    "casa al": "CASA after learning",
-    "casa before learning": "CASA before learning",
-    "casa after learning": "CASA after learning",
+_CONDITION_ALIASES = {_condition_key(c): c for c in CONDITIONS} | {
+    "casa before": CASA_BEFORE_LEARNING,
+    "casa after": CASA_AFTER_LEARNING,
+    "casa bl": CASA_BEFORE_LEARNING,
+    "casa al": CASA_AFTER_LEARNING,
 }
 
 
@@ -70,7 +74,7 @@ def parse_comparison(text: str) -> tuple[str, str]:
     """The two conditions of a Tukey comparison such as ``"CASA - NA"`` or ``"NA vs PBA"``.
 
     Separators ``" - "``, ``" vs "``, ``" vs. "`` are understood; names as in
-    :data:`casa_core.figures.style.CONDITIONS`, case, underscores and parentheses
+    :data:`casa_core.vocabulary.CONDITIONS`, case, underscores and parentheses
     ignored (``"CASA (before learning)"``, ``"casa_before_learning"``).
 
     Raises
@@ -87,7 +91,7 @@ def parse_comparison(text: str) -> tuple[str, str]:
         if key not in _CONDITION_ALIASES:
             raise ValueError(
                 f"comparison {text!r}: unknown condition {part!r}; "
-                f"expected one of {', '.join(style.CONDITIONS)}"
+                f"expected one of {', '.join(CONDITIONS)}"
             )
         names.append(_CONDITION_ALIASES[key])
     return names[0], names[1]
@@ -96,7 +100,7 @@ def parse_comparison(text: str) -> tuple[str, str]:
 def _tasks_of(value: object) -> tuple[str, ...]:
     """Tasks a stats row covers: one task, a ``+``/``,``-separated list, or a pooled name."""
     if value is None or (isinstance(value, float) and np.isnan(value)) or str(value) == "":
-        return tuple(style.TASK_LABELS)
+        return style.SHOWN_TASKS
     text = str(value).strip().lower()
     if text in POOLED_TASKS:
         return POOLED_TASKS[text]
@@ -111,7 +115,7 @@ def tukey_rows(stats: pd.DataFrame | None, metric_names: tuple[str, ...]) -> pd.
     empty = pd.DataFrame(columns=["tasks", "a", "b", "p"])
     if stats is None or stats.empty:
         return empty
-    style.require_columns(stats, ["analysis", "task", "metric", "comparison", "p"], "stats")
+    tables.require_columns(stats, ["analysis", "task", "metric", "comparison", "p"], "stats")
     tukey = stats[stats["analysis"].astype(str).str.contains("tukey", case=False)]
     for name in metric_names:
         rows = tukey[tukey["metric"].astype(str) == name]
@@ -136,11 +140,11 @@ def tukey_rows(stats: pd.DataFrame | None, metric_names: tuple[str, ...]) -> pd.
 
 def prepare_trials(trials: pd.DataFrame) -> pd.DataFrame:
     """Trials of the compared tasks and phases, with their ``condition`` (paper's words)."""
-    style.require_columns(
+    tables.require_columns(
         trials, ["participant", "task", "method", "phase", *[m for m, _, _ in METRICS]], "trials"
     )
-    rows = trials[trials["task"].isin(list(style.TASK_LABELS))]
-    rows = rows[~rows["phase"].isin(EXCLUDED_PHASES)].copy()
+    rows = trials[trials["task"].isin(list(style.SHOWN_TASKS))]
+    rows = rows[~rows["phase"].isin(UNANALYSED_PHASES)].copy()
     rows = style.label_conditions(rows, "trials")
     return rows
 
@@ -173,7 +177,7 @@ def objective_figure(
         data lack are left out, and a caption names them and any missing condition.
     """
     rows = prepare_trials(trials)
-    tasks = [t for t in style.TASK_LABELS if t in set(rows["task"])]
+    tasks = [t for t in style.SHOWN_TASKS if t in set(rows["task"])]
     with style.context():
         fig = style.new_figure(7.0, 2.5)
         axes = fig.subplots(1, len(METRICS))
@@ -185,7 +189,7 @@ def objective_figure(
                 style.note_axes(ax, f"no {label.split(' (')[0].lower()} in the data")
                 continue
             tops = _bars.draw_grouped_bars(ax, points, "task", tasks, metric)
-            ax.set_xticklabels([style.TASK_LABELS[t].replace(" ", "\n") for t in tasks])
+            ax.set_xticklabels([TASK_LABELS[t].replace(" ", "\n") for t in tasks])
             ax.set_ylabel(label)
             ax.set_ylim(bottom=0)
             if metric == "relative_effort":
@@ -236,17 +240,13 @@ def _brackets(tops, tukey: pd.DataFrame) -> tuple[list[tuple[float, float, float
 def _missing_notes(rows: pd.DataFrame, tasks: list[str]) -> list[str]:
     """Sentences naming the tasks and conditions the data lack."""
     notes = []
-    absent = [style.TASK_LABELS[t] for t in style.TASK_LABELS if t not in tasks]
+    absent = [TASK_LABELS[t] for t in style.SHOWN_TASKS if t not in tasks]
     if absent:
         notes.append(f"No trials for {', '.join(absent)}.")
-    expected = {
-        "known_goal": ("NA", "PBA", "CASA"),
-        "unknown_goal": ("NA", "PBA", "CASA before learning", "CASA after learning"),
-        "unknown_skill": ("NA", "PBA", "CASA before learning", "CASA after learning"),
-    }
+    expected = TASK_CONDITIONS
     for task in tasks:
         have = set(rows.loc[rows["task"] == task, "condition"])
         lacking = [c for c in expected[task] if c not in have]
         if lacking:
-            notes.append(f"{style.TASK_LABELS[task]}: no {', '.join(lacking)}.")
+            notes.append(f"{TASK_LABELS[task]}: no {', '.join(lacking)}.")
     return notes

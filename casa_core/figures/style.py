@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import itertools
 import os
-import tempfile
 import textwrap
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -20,24 +19,11 @@ import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from casa_core.study import protocol
+from casa_core.io.atomic import atomic_path
+from casa_core.vocabulary import KNOWN_TASK, UNKNOWN_TASKS, condition_of
 
-#: Resolution of the PNG copies (the issue asks for 200 dpi).
+#: Resolution of the PNG copies.
 PNG_DPI = 200
-
-#: The study's conditions in the paper's order and words. A condition is a method in a
-#: phase: CASA appears without misspecification, before and after learning. The protocol
-#: runs only CASA after learning; NA or PBA after learning would be conditions of their own
-#: (as in :func:`casa_core.study.protocol.condition_of`).
-CONDITIONS: tuple[str, ...] = (
-    "NA",
-    "PBA",
-    "CASA",
-    "CASA before learning",
-    "CASA after learning",
-    "NA after learning",
-    "PBA after learning",
-)
 
 #: Okabe-Ito colours for the conditions (colour-blind safe; the CASA family in blues/green).
 METHOD_COLOURS: dict[str, str] = {
@@ -50,58 +36,40 @@ METHOD_COLOURS: dict[str, str] = {
     "PBA after learning": "#D55E00",  # vermillion
 }
 
-#: Tasks on the axes, in the paper's order and words.
-TASK_LABELS: dict[str, str] = {
-    "known_goal": "Known Goal",
-    "unknown_goal": "Unknown Goal",
-    "unknown_skill": "Unknown Skill",
-}
+#: The tasks the figures show, in the paper's order: those run in the study's conditions
+#: (familiarization is practice). Their names are :data:`casa_core.vocabulary.TASK_LABELS`.
+SHOWN_TASKS: tuple[str, ...] = (KNOWN_TASK, *UNKNOWN_TASKS)
 
 #: The goals' colours in the paper's scene figure; learned or other intents fall back
 #: to :data:`OTHER_INTENT_COLOURS` in name order.
 GOAL_COLOURS: dict[str, str] = {"green": "#1A9E3F", "purple": "#7B3294", "red": "#D7191C"}
 OTHER_INTENT_COLOURS: tuple[str, ...] = ("#A6611A", "#000000", "#0072B2", "#E69F00")
 
-#: The three Likert questions (NOTES, section 3) and the paper's wording of them.
-LIKERT_QUESTIONS: dict[str, str] = {
-    "understood": "Understood",
-    "effortless": "Effortless",
-    "useful": "Useful",
-}
-
 SIMULATED_NOTE = "simulated participants"
 
 
-def condition_of(method: str, phase: str) -> str:
-    """Name of the study condition of a trial, in the paper's words.
+def row_condition(method: str, phase: str) -> str:
+    """The condition a figure labels a row with: the paper's, else the method's name.
 
-    Parameters
-    ----------
-    method : str
-        ``"NA"``, ``"PBA"`` or ``"CASA"``.
-    phase : str
-        The trial's phase (casa-trial/1). CASA in ``before_learning`` and
-        ``after_learning`` is the paper's "CASA before / after learning"; NA and PBA keep
-        their names except after learning. The stats table's rule
-        (:func:`casa_core.study.protocol.condition_of`); phases it does not analyse keep
-        the method's name.
-
-    Returns
-    -------
-    str
-        One of :data:`CONDITIONS`.
+    Examples
+    --------
+    >>> row_condition("CASA", "before_learning"), row_condition("NA", "familiarization")
+    ('CASA before learning', 'NA')
     """
-    if method not in protocol.METHODS:
-        raise ValueError(f"unknown method {method!r}; expected NA, PBA or CASA")
-    return protocol.condition_of(method, phase) or method
+    return condition_of(method, phase) or method
 
 
 def label_conditions(rows: pd.DataFrame, table: str) -> pd.DataFrame:
-    """``rows`` with a ``condition`` column (:func:`condition_of`); an error names the row."""
+    """``rows`` with a ``condition`` column, the paper's name of each row's condition.
+
+    The name is :func:`casa_core.vocabulary.condition_of`; phases the study does not
+    analyse (familiarization, demonstrations) keep the method's name. An unknown method
+    is an error naming the row.
+    """
     conditions = []
     for index, row in rows.iterrows():
         try:
-            conditions.append(condition_of(str(row["method"]), str(row["phase"])))
+            conditions.append(row_condition(str(row["method"]), str(row["phase"])))
         except ValueError as error:
             raise ValueError(f"{table} row {index}: {error}") from None
     rows["condition"] = conditions
@@ -143,16 +111,6 @@ def describe(what: str, frame: pd.DataFrame) -> str:
     return f"{what}, {who} (n = {n})." if n else f"{what}, {who}."
 
 
-def require_columns(frame: pd.DataFrame, columns: Sequence[str], table: str) -> None:
-    """Raise a clear error if ``frame`` (the table named ``table``) lacks some ``columns``."""
-    missing = [c for c in columns if c not in frame.columns]
-    if missing:
-        raise ValueError(
-            f"{table}: missing column(s) {', '.join(missing)}; "
-            f"expected at least {', '.join(columns)}"
-        )
-
-
 #: Matplotlib settings for every figure: small serif-free fonts readable at column width,
 #: no top/right spines, fonts embedded as TrueType in the PDF (editable, no Type 3).
 RC: dict[str, object] = {
@@ -170,24 +128,6 @@ RC: dict[str, object] = {
     "pdf.fonttype": 42,
     "savefig.pad_inches": 0.03,
 }
-
-
-def numeric_columns(frame: pd.DataFrame, columns: Sequence[str], table: str) -> pd.DataFrame:
-    """A copy of ``frame`` with ``columns`` as floats; a clear error names a bad cell's row.
-
-    Empty cells stay missing; any other text that is not a number is an error.
-    """
-    frame = frame.copy()
-    for column in columns:
-        values = pd.to_numeric(frame[column], errors="coerce")
-        bad = values.isna() & frame[column].notna()
-        if bad.any():
-            index = bad.idxmax()
-            raise ValueError(
-                f"{table} row {index}: {column} {frame.loc[index, column]!r} is not a number"
-            )
-        frame[column] = values.astype(float)
-    return frame
 
 
 def context():
@@ -236,18 +176,9 @@ def add_caption(fig: Figure, text: str) -> None:
 
 
 def _atomic_savefig(fig: Figure, path: Path, **kwargs) -> None:
-    """Write ``fig`` to ``path`` through a temporary file in the same folder."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        with context():
-            fig.savefig(tmp, format=path.suffix.lstrip("."), bbox_inches="tight", **kwargs)
-        os.chmod(tmp, 0o644)  # mkstemp makes the file private; figures are to be shared
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Write ``fig`` to ``path`` atomically (:func:`casa_core.io.atomic.atomic_path`)."""
+    with atomic_path(path) as tmp, context():
+        fig.savefig(tmp, format=path.suffix.lstrip("."), bbox_inches="tight", **kwargs)
 
 
 def save_figure(fig: Figure, prefix: str | os.PathLike, formats: Sequence[str] = ("pdf", "png")):

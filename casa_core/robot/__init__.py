@@ -3,5 +3,5 @@
 ``kinematics``: forward/inverse kinematics and the end-effector orientation in numpy;
 ``keys``: the 8-key keyboard map; ``scene``: table, goals and pouring target;
 ``sim``: the 20 Hz Cartesian controller with pybullet in the loop; ``teleop``: the
-windowed teleoperation and key sources; ``bench``: ``casa bench``.
+pybullet window and its keyboard. The robot knows nothing of learning or the study.
 """

@@ -1,9 +1,11 @@
-"""The keyboard map: 8 keys to a Cartesian velocity ``[vx, vy, vz, vrot]`` (NOTES, section 1).
+"""The keyboard map: 8 keys to a Cartesian velocity ``[vx, vy, vz, vrot]``.
 
 Six keys move the end effector along +-x, +-y, +-z of the robot base frame at
 ``speed`` (0.05 m/s); two keys turn the last joint at ``rot_speed`` (0.5 rad/s). This
-is the paper's direct teleoperation function T. Two opposite keys held together
-cancel. Keys are named as in the casa-trial/1 log's ``keys`` column.
+is the paper's direct teleoperation function T (docs/paper-to-code.md), with the
+original implementation's speeds. Two opposite keys held together cancel. Keys are
+named as in the casa-trial/1 log's ``keys`` column (:data:`casa_core.vocabulary.KEYS`,
+docs/data-contracts.md).
 """
 
 from __future__ import annotations
@@ -12,9 +14,10 @@ from collections.abc import Iterable
 
 import numpy as np
 
-#: The keys in their canonical order (the order they are written to logs).
-KEYS = ("x+", "x-", "y+", "y-", "z+", "z-", "rot+", "rot-")
+from casa_core.vocabulary import KEYS
 
+#: The ``(plus, minus)`` key of each axis of ``[x, y, z, rot]``, in the keys' order.
+AXIS_KEYS = tuple(zip(KEYS[::2], KEYS[1::2], strict=True))
 #: Unit direction of each key in ``[x, y, z, rot]``.
 KEY_DIRECTIONS = {
     "x+": (1, 0, 0, 0),

@@ -1,8 +1,9 @@
 """Forward kinematics, Jacobian and inverse kinematics of the Kinova JACO 7-DoF (j2s7s300).
 
-The joint origins are those of the original implementation (NOTES, section 1); every
-arm joint turns about its local z axis. Our URDF ``j2s7s300.urdf`` is built from the
-same numbers, and the tests check this numpy forward kinematics against pybullet's.
+The joint origins are those of the JACO description the original implementation used
+(docs/departures.md lists where we differ from it); every arm joint turns about its
+local z axis. Our URDF ``j2s7s300.urdf`` is built from the same numbers, and the tests
+check this numpy forward kinematics against pybullet's.
 
 The end-effector (EE) frame is the ``tool`` frame, whose origin is where the cup is
 held. Its orientation is fixed during teleoperation except for the turn of the last
@@ -31,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Joint origins parent -> child, ``(xyz [m], rpy [rad])`` (NOTES, section 1). The first
+#: Joint origins parent -> child, ``(xyz [m], rpy [rad])``, the original's. The first
 #: seven are the revolute arm joints 1..7, the last is the fixed joint to the tool.
 JOINT_ORIGINS: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...] = (
     ((0.0, 0.0, 0.15675), (0.0, np.pi, 0.0)),

@@ -1,16 +1,18 @@
-"""The task scene in pybullet: table, goals and pouring target, from the layout dict.
+"""The task scene in pybullet: table, goals and pouring target, from a :class:`Scene`.
 
-The layout is the dict read from ``config/scene.yaml`` (read once at the edge and passed
-down). Goals and the pouring marker are visual only: nothing collides with them, they
-show the participant where to go. The table top is the plane z = 0 of the robot base.
+The scene (:class:`casa_core.scene.Scene`) is loaded and validated once, at the edge,
+and passed down. Goals and the pouring marker are visual only: nothing collides with
+them, they show the participant where to go. The table top is the plane z = 0 of the
+robot base.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
 import pybullet as p
+
+from casa_core.scene import REQUIRED_GOALS, Scene
 
 #: Colours (RGBA) of the scene objects; goals are named after theirs.
 COLORS = {
@@ -35,47 +37,6 @@ class SceneBodies:
     bowl: int
 
 
-def _vector(layout: dict, path: tuple[str, ...], size: int = 3) -> np.ndarray:
-    node = layout
-    for key in path:
-        if not isinstance(node, dict) or key not in node:
-            raise ValueError(f"scene layout: missing key {'.'.join(path)}")
-        node = node[key]
-    try:
-        value = np.asarray(node, dtype=float)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"scene layout: {'.'.join(path)} must be numbers, got {node!r}") from error
-    if value.shape != (size,) or not np.all(np.isfinite(value)):
-        raise ValueError(
-            f"scene layout: {'.'.join(path)} must be {size} finite numbers, got {node!r}"
-        )
-    return value
-
-
-def check_layout(layout: dict) -> None:
-    """Raise ``ValueError`` naming the key when the layout lacks what the scene needs."""
-    _vector(layout, ("start", "position"))
-    for name in ("green", "purple", "red"):
-        _vector(layout, ("goals", name))
-    _vector(layout, ("pouring", "position"))
-    _vector(layout, ("pouring", "bowl"))
-    scalars = (
-        ("start", "rot"),
-        ("pouring", "tilt"),
-        ("teleop", "speed"),
-        ("teleop", "rot_speed"),
-        ("teleop", "dt"),
-    )
-    for path in scalars:
-        node = layout.get(path[0], {})
-        value = node.get(path[1]) if isinstance(node, dict) else None
-        if not isinstance(value, int | float) or not np.isfinite(value):
-            raise ValueError(f"scene layout: {'.'.join(path)} must be a number, got {value!r}")
-    for key in ("speed", "rot_speed", "dt"):
-        if layout["teleop"][key] <= 0:
-            raise ValueError(f"scene layout: teleop.{key} must be positive")
-
-
 def _marker(client: int, position, radius: float, rgba) -> int:
     shape = p.createVisualShape(
         p.GEOM_SPHERE, radius=radius, rgbaColor=rgba, physicsClientId=client
@@ -85,18 +46,17 @@ def _marker(client: int, position, radius: float, rgba) -> int:
     )
 
 
-def build_scene(client: int, layout: dict) -> SceneBodies:
+def build_scene(client: int, scene: Scene) -> SceneBodies:
     """Add the table, goals, pouring marker and bowl to a pybullet client.
 
     Parameters
     ----------
     client : int
         pybullet physics client id.
-    layout : dict
-        Scene layout (``config/scene.yaml``): ``goals.{green,purple,red}``,
-        ``pouring.position`` and ``pouring.bowl`` in the robot base frame (m).
+    scene : Scene
+        Goals ``green``, ``purple`` and ``red``, ``pouring.position`` and
+        ``pouring.bowl`` in the robot base frame (m).
     """
-    check_layout(layout)
     half = [0.6, 0.75, 0.02]
     table_col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=client)
     table_vis = p.createVisualShape(
@@ -111,12 +71,12 @@ def build_scene(client: int, layout: dict) -> SceneBodies:
         physicsClientId=client,
     )
     goals = {
-        name: _marker(client, _vector(layout, ("goals", name)), GOAL_RADIUS, COLORS[name])
-        for name in ("green", "purple", "red")
+        name: _marker(client, scene.goal(name), GOAL_RADIUS, COLORS[name])
+        for name in REQUIRED_GOALS
     }
-    pouring = _marker(client, _vector(layout, ("pouring", "position")), 0.05, COLORS["pouring"])
+    pouring = _marker(client, scene.pouring.position, 0.05, COLORS["pouring"])
     # The bowl is a cylinder standing on the table with its centre at ``pouring.bowl``.
-    bowl_position = _vector(layout, ("pouring", "bowl"))
+    bowl_position = scene.pouring.bowl
     bowl_height = 2 * bowl_position[2] if bowl_position[2] > 0 else 0.04
     bowl_vis = p.createVisualShape(
         p.GEOM_CYLINDER,

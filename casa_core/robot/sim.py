@@ -3,7 +3,8 @@
 Every control tick (``dt`` = 0.05 s) :meth:`ArmSimulation.step` takes a Cartesian
 velocity ``[vx, vy, vz, vrot]`` (the blended action), turns the Cartesian part into
 joint velocities through pybullet's Jacobian by damped least squares and the rotation
-into a turn of the last joint (NOTES section 1), lets pybullet's velocity motors
+into a turn of the last joint (as the original implementation does, see
+docs/paper-to-code.md), lets pybullet's velocity motors
 drive the joints for ``dt`` and reads the end-effector pose and the joints back from
 pybullet. The tool orientation is held at :func:`~casa_core.robot.kinematics.ee_rotation`
 of the current ``rot``: only the last joint's turn changes it.
@@ -30,7 +31,8 @@ import numpy as np
 import pybullet as p
 
 from casa_core.robot import kinematics as kin
-from casa_core.robot.scene import SceneBodies, build_scene, check_layout
+from casa_core.robot.scene import SceneBodies, build_scene
+from casa_core.scene import Scene
 
 URDF_PATH = Path(str(files("casa_core.robot").joinpath("j2s7s300.urdf")))
 
@@ -45,7 +47,7 @@ class ControllerSettings:
     Attributes
     ----------
     dt : float
-        Control tick (s); NOTES section 1: 0.05 s (20 Hz).
+        Control tick (s): 0.05 s (20 Hz), the original implementation's.
     substeps : int
         pybullet physics steps per tick.
     damping : float
@@ -105,12 +107,12 @@ class ArmSimulation:
 
     Parameters
     ----------
-    layout : dict
-        Scene layout (``config/scene.yaml``).
+    scene : Scene
+        The task scene; the arm starts at ``scene.start_state``.
     gui : bool
         Open a pybullet window (needs a display) instead of running headless.
     settings : ControllerSettings, optional
-        Controller gains; default :class:`ControllerSettings` with the layout's
+        Controller gains; default :class:`ControllerSettings` with the scene's
         ``teleop.dt`` as the tick.
 
     Notes
@@ -121,12 +123,13 @@ class ArmSimulation:
     :meth:`close`.
     """
 
-    def __init__(self, layout: dict, gui: bool = False, settings: ControllerSettings | None = None):
-        check_layout(layout)
+    def __init__(
+        self, scene: Scene, *, gui: bool = False, settings: ControllerSettings | None = None
+    ):
         if settings is None:
-            settings = ControllerSettings(dt=float(layout["teleop"]["dt"]))
+            settings = ControllerSettings(dt=scene.teleop.dt)
         self.settings = settings
-        self.layout = layout
+        self.scene = scene
         self.gui = gui
         if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
             # pybullet's window needs X11 and would end the whole process without one.
@@ -141,7 +144,7 @@ class ArmSimulation:
             p.setGravity(0, 0, 0, physicsClientId=self.client)
             p.setTimeStep(self.settings.dt / self.settings.substeps, physicsClientId=self.client)
             self.robot = p.loadURDF(str(URDF_PATH), useFixedBase=True, physicsClientId=self.client)
-            self.bodies: SceneBodies = build_scene(self.client, layout)
+            self.bodies: SceneBodies = build_scene(self.client, scene)
         except Exception:
             p.disconnect(self.client)
             raise
@@ -149,7 +152,7 @@ class ArmSimulation:
         self._q = np.zeros(kin.N_JOINTS)
         self._state = np.zeros(4)
         self._reference = np.zeros(4)
-        self.reset(np.array([*layout["start"]["position"], layout["start"]["rot"]], dtype=float))
+        self.reset(scene.start_state)
 
     # -- lifecycle ---------------------------------------------------------------------
     def close(self) -> None:
@@ -251,8 +254,9 @@ class ArmSimulation:
         # qdot = c + W^-1 J^T (J W^-1 J^T + damping^2 I)^-1 (twist - J c).
         centring = (_MIDDLE_OR_ZERO - self._q) * _BOUNDED * s.null_gain
         qdot = centring + weighted.T @ np.linalg.solve(gram, twist - jac @ centring)
-        # The rotate keys turn the last joint itself (NOTES section 1): its axis is the
-        # tool's z axis reversed, and turning it moves neither the cup nor that axis.
+        # The rotate keys turn the last joint itself, as in the original implementation:
+        # its axis is the tool's z axis reversed, and turning it moves neither the cup nor
+        # that axis.
         qdot[6] -= action[3]
         excess = np.max(np.abs(qdot) / self._joint_speed)
         return qdot / excess if excess > 1.0 else qdot

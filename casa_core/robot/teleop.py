@@ -6,7 +6,7 @@ the way they point on screen. A countdown (3, 2, 1, GO) opens the trial; a banne
 tells the time, the held keys and the robot's share of control (1 - alpha); the trial
 ends when the person presses Enter (or at ``max_duration``), and the window says
 where the log was written. This module holds the window and the keyboard;
-:func:`casa_core.study.trial.run_teleop` runs them through the study's trial runner,
+:func:`casa_core.study.teleop_session.run_teleop` runs them through the closed loop,
 so a window trial and a simulated trial run the same code.
 
 Keys (the window's own keyboard shortcuts are switched off):

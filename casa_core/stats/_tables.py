@@ -1,4 +1,4 @@
-"""Input checks and small helpers shared by the statistics modules.
+"""Small helpers shared by the statistics modules (input checks: :mod:`casa_core.tables`).
 
 Two kinds of trouble are kept apart on purpose:
 
@@ -16,35 +16,11 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from casa_core.tables import numeric_column, require_columns
+
 
 class Skipped(Exception):
     """Raised inside an analysis when the data cannot support the test; the message says why."""
-
-
-def require_columns(data: pd.DataFrame, columns: Sequence[str], what: str) -> None:
-    """Raise ``ValueError`` naming the first column of ``columns`` missing from ``data``."""
-    if not isinstance(data, pd.DataFrame):
-        raise ValueError(f"{what}: data must be a pandas DataFrame, got {type(data).__name__}")
-    for column in columns:
-        if column not in data.columns:
-            raise ValueError(
-                f"{what}: column {column!r} is missing (columns present: {list(data.columns)})"
-            )
-
-
-def numeric_column(data: pd.DataFrame, column: str, what: str) -> pd.Series:
-    """``data[column]`` as floats; a non-numeric entry raises ``ValueError`` naming its row."""
-    values = pd.to_numeric(data[column], errors="coerce")
-    bad = values.isna() & data[column].notna()
-    if bad.any():
-        row = bad.idxmax()
-        raise ValueError(
-            f"{what}: column {column!r}, row {row}: {data[column][row]!r} is not a number"
-        )
-    if np.isinf(values.to_numpy(dtype=float)).any():
-        row = values.index[np.isinf(values.to_numpy(dtype=float))][0]
-        raise ValueError(f"{what}: column {column!r}, row {row}: value is infinite")
-    return values.astype(float)
 
 
 def levels(series: pd.Series) -> list:

@@ -1,8 +1,46 @@
-"""APA-style formatting of test results ("F(2, 30) = 104.93, p < .001")."""
+"""APA-style rendering: numbers, p-values, test results and the Markdown report of stats.csv.
+
+Every piece of text the statistics produce is written here, from one test
+(``F(2, 30) = 104.93, p < .001``) to the report of the whole stats table
+(:func:`report_markdown`, the study's ``stats.md``).
+"""
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
+import pandas as pd
+
+from casa_core.stats.study import STATS_COLUMNS
+from casa_core.tables import require_columns
+
+#: Section titles of the report, one per hypothesis, in order.
+TITLES = {
+    "H1": "H1: no misspecification (Known Goal)",
+    "H2": "H2: misspecification, CASA before learning",
+    "H3": "H3: misspecification, CASA after learning",
+    "H4": "H4: subjective (Likert)",
+}
+#: How the report names each ``analysis`` of the stats table.
+ANALYSIS_NAMES = {
+    "anova": "ANOVA",
+    "ancova": "ANCOVA (task as covariate)",
+    "tukey": "Tukey HSD",
+    "noninferiority": "non-inferiority",
+    "rm_anova": "repeated-measures ANOVA",
+    "mixedlm": "mixed model (participant intercept)",
+    "friedman": "Friedman",
+    "wilcoxon": "Wilcoxon signed-rank",
+}
+_INTRODUCTION = (
+    "Paper form: each participant-condition an independent observation (ANOVA, ANCOVA, "
+    "Tukey HSD, independent non-inferiority). Within-subjects form: repeated-measures "
+    "ANOVA, a mixed model with a participant random intercept (Wald χ²) and paired "
+    "non-inferiority. Non-inferiority reports the one-sided 95% upper bound of "
+    "mean(CASA) - mean(reference), the smallest margin at which CASA is non-inferior "
+    "(lower is better for every metric)."
+)
 
 
 def _number(value: float, digits: int = 2) -> str:
@@ -20,7 +58,13 @@ def _no_leading_zero(text: str) -> str:
 
 
 def p_value(p: float) -> str:
-    """``p < .001`` below one in a thousand, else ``p = .xxx``."""
+    """``p < .001`` below one in a thousand, else ``p = .xxx``.
+
+    Examples
+    --------
+    >>> p_value(0.0381), p_value(2e-5), p_value(float("nan"))
+    ('p = .038', 'p < .001', 'p = n/a')
+    """
     if not math.isfinite(p):
         return "p = n/a"
     if p < 0.001:
@@ -29,15 +73,161 @@ def p_value(p: float) -> str:
 
 
 def proportion(value: float) -> str:
-    """A bounded quantity (effect size) with APA's missing leading zero, two decimals."""
+    """A bounded quantity (effect size) with APA's missing leading zero, two decimals.
+
+    Examples
+    --------
+    >>> proportion(0.371), proportion(-0.5)
+    ('.37', '-.50')
+    """
     return _no_leading_zero(_number(value))
 
 
 def f_test(f: float, df1: float, df2: float, p: float) -> str:
-    """``F(df1, df2) = f, p ...``."""
+    """``F(df1, df2) = f, p ...``; corrected (non-integer) degrees of freedom keep 2 decimals.
+
+    Examples
+    --------
+    >>> f_test(104.9312, 2, 30, 2e-14)
+    'F(2, 30) = 104.93, p < .001'
+    >>> f_test(6.119, 1.46, 14.6, 0.0183)
+    'F(1.46, 14.60) = 6.12, p = .018'
+    """
     return f"F({_df(df1)}, {_df(df2)}) = {_number(f)}, {p_value(p)}"
 
 
 def chi2_test(chi2: float, df: float, p: float) -> str:
-    """``χ²(df) = chi2, p ...``."""
+    """``χ²(df) = chi2, p ...``.
+
+    Examples
+    --------
+    >>> chi2_test(7.2986, 2, 0.026)
+    'χ²(2) = 7.30, p = .026'
+    """
     return f"χ²({_df(df)}) = {_number(chi2)}, {p_value(p)}"
+
+
+def result(row: pd.Series) -> str:
+    """One row of the stats table as an APA result; a skipped test says why.
+
+    Parameters
+    ----------
+    row : pandas.Series
+        A row of :func:`casa_core.stats.analyze_study` (columns
+        :data:`casa_core.stats.study.STATS_COLUMNS`).
+
+    Returns
+    -------
+    str
+        E.g. ``F(2, 30) = 104.93, p < .001, ηp² = .87`` or ``skipped: <the note>``.
+
+    Examples
+    --------
+    >>> row = pd.Series({"analysis": "anova", "statistic": 41.19, "df1": 2.0, "df2": 9.0,
+    ...                  "p": 3.0e-5, "effect_size": 0.9015, "note": ""})
+    >>> result(row)
+    'F(2, 9) = 41.19, p < .001, ηp² = .90'
+    >>> skipped = row.copy()
+    >>> skipped["statistic"], skipped["note"] = float("nan"), "zero variance"
+    >>> result(skipped)
+    'skipped: zero variance'
+    """
+    kind = row["analysis"]
+    if kind in ("anova", "ancova", "rm_anova", "mixedlm", "friedman") and not np.isfinite(
+        row["statistic"]
+    ):
+        return f"skipped: {row['note']}"
+    if kind in ("anova", "ancova"):
+        return f"{f_test(row.statistic, row.df1, row.df2, row.p)}, ηp² = " + proportion(
+            row.effect_size
+        )
+    if kind == "rm_anova":
+        return f"{f_test(row.statistic, row.df1, row.df2, row.p)}, ηG² = " + proportion(
+            row.effect_size
+        )
+    if kind == "mixedlm":
+        return chi2_test(row.statistic, row.df1, row.p)
+    if kind == "friedman":
+        return f"{chi2_test(row.statistic, row.df1, row.p)}, W = " + proportion(row.effect_size)
+    if (
+        not np.isfinite(row["estimate"])
+        and kind != "wilcoxon"
+        or (kind == "wilcoxon" and not np.isfinite(row["statistic"]))
+    ):
+        return f"skipped: {row['note']}"
+    if kind == "tukey":
+        return (
+            f"diff = {row.estimate:.3g}, 95% CI [{row.ci_low:.3g}, {row.ci_high:.3g}], "
+            f"{p_value(row.p)}"
+        )
+    if kind == "noninferiority":
+        text = f"diff = {row.estimate:.3g}, one-sided 95% bound = {row.ci_high:.3g}"
+        if np.isfinite(row["margin"]):
+            verdict = "non-inferior" if row["noninferior"] else "not shown non-inferior"
+            text += f"; margin {row.margin:.3g}: {verdict}, {p_value(row.p)}"
+        return text
+    if kind == "wilcoxon":
+        return f"V = {row.statistic:.4g}, {p_value(row.p)} (Holm), r = " + proportion(
+            row.effect_size
+        )
+    return ""
+
+
+def report_markdown(table: pd.DataFrame) -> str:
+    """An APA-style Markdown report of the stats table from :func:`analyze_study`.
+
+    One section per hypothesis (:data:`TITLES`), one table row per test, e.g.
+    ``F(2, 30) = 104.93, p < .001, ηp² = .87`` (:func:`result`).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The output of :func:`casa_core.stats.analyze_study` (or stats.csv read back).
+
+    Returns
+    -------
+    str
+        The Markdown text.
+
+    Examples
+    --------
+    >>> row = dict.fromkeys(STATS_COLUMNS, float("nan")) | {
+    ...     "hypothesis": "H1", "analysis": "anova", "task": "known_goal",
+    ...     "metric": "error", "term": "method", "comparison": "", "statistic": 41.19,
+    ...     "df1": 2.0, "df2": 9.0, "p": 3.0e-5, "effect_size": 0.9015, "note": ""}
+    >>> print(report_markdown(pd.DataFrame([row])).split("## ")[1])
+    H1: no misspecification (Known Goal)
+    <BLANKLINE>
+    | Task | Metric | Analysis | Term | Result |
+    | --- | --- | --- | --- | --- |
+    | known_goal | error | ANOVA | method | F(2, 9) = 41.19, p < .001, ηp² = .90 |
+    <BLANKLINE>
+    """
+    require_columns(table, STATS_COLUMNS, "stats table")
+    # stats.csv read back with pandas turns empty text into NaN.
+    table = table.fillna({"note": "", "comparison": "", "term": ""})
+    lines = ["# CASA user study: statistics", "", _INTRODUCTION]
+    for hypothesis, title in TITLES.items():
+        part = table[table["hypothesis"] == hypothesis]
+        if part.empty:
+            continue
+        lines += [
+            "",
+            f"## {title}",
+            "",
+            "| Task | Metric | Analysis | Term | Result |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+        for _, row in part.iterrows():
+            term = row["comparison"] or row["term"]
+            if row["analysis"] == "noninferiority" and "paired" in str(row["note"]):
+                term += " (paired)"
+            cells = [
+                row["task"],
+                row["metric"],
+                ANALYSIS_NAMES.get(row["analysis"], ""),
+                term,
+                result(row),
+            ]
+            lines.append("| " + " | ".join(str(c).replace("|", "/") for c in cells) + " |")
+    return "\n".join(lines) + "\n"

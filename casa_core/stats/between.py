@@ -1,9 +1,10 @@
 """Between-subjects analyses, as the paper ran them: ANOVA, ANCOVA, Tukey HSD, non-inferiority.
 
-The paper treats every participant-condition as an independent observation (NOTES section 2);
-these functions do exactly that.  ``casa_core.stats.within`` holds the analyses that respect
-the within-subjects design.  Every function takes a tidy table (one row per observation) and
-returns a tidy table; degenerate data give NaN statistics and a ``note`` (see ``_tables``).
+The paper treats every participant-condition as an independent observation (see
+docs/departures.md); these functions do exactly that.  ``casa_core.stats.within`` holds the
+analyses that respect the within-subjects design.  Every function takes a tidy table (one row
+per observation) and returns a tidy table; degenerate data give NaN statistics and a
+``note`` (see ``_tables``).
 """
 
 from __future__ import annotations
@@ -61,6 +62,14 @@ def anova(data: pd.DataFrame, dv: str, between: str | Sequence[str]) -> pd.DataF
         Columns ``term, F, df1, df2, p, np2, n, note``: F ratio, its degrees of freedom,
         p-value, partial eta squared ``SS_term / (SS_term + SS_residual)``, the number of
         observations used, and why the test was skipped (empty when it ran).
+
+    Examples
+    --------
+    >>> data = pd.DataFrame({"group": ["a", "a", "b", "b", "c", "c"],
+    ...                      "y": [1.0, 1.2, 2.1, 1.9, 3.2, 2.8]})
+    >>> anova(data, "y", "group")[["term", "F", "df1", "df2", "p", "np2"]].round(3)
+        term       F  df1  df2      p    np2
+    0  group  45.167  2.0  3.0  0.006  0.968
     """
     factors = [between] if isinstance(between, str) else list(between)
     return _linear_model_table(data, dv, factors, covariate=None, what="anova")
@@ -86,6 +95,16 @@ def ancova(data: pd.DataFrame, dv: str, between: str, covariate: str) -> pd.Data
     -------
     pandas.DataFrame
         Same columns as :func:`anova`, a row for ``between`` then one for ``covariate``.
+
+    Examples
+    --------
+    >>> data = pd.DataFrame({"group": ["a"] * 3 + ["b"] * 3,
+    ...                      "x": [1.0, 2.0, 3.0, 1.5, 2.5, 3.5],
+    ...                      "y": [1.1, 1.9, 3.2, 2.4, 3.1, 4.4]})
+    >>> ancova(data, "y", "group", "x")[["term", "F", "df1", "df2", "p"]].round(3)
+        term        F  df1  df2      p
+    0  group   20.523  1.0  3.0  0.020
+    1      x  121.032  1.0  3.0  0.002
     """
     return _linear_model_table(data, dv, [between], covariate=covariate, what="ancova")
 
@@ -156,10 +175,8 @@ def tukey_hsd(data: pd.DataFrame, dv: str, between: str) -> pd.DataFrame:
     ----------
     data : pandas.DataFrame
         One row per observation.
-    dv : str
-        Column of the dependent variable.
-    between : str
-        Factor column.
+    dv, between : str
+        Columns of the dependent variable and of the factor.
 
     Returns
     -------
@@ -167,6 +184,15 @@ def tukey_hsd(data: pd.DataFrame, dv: str, between: str) -> pd.DataFrame:
         One row per pair ``A < B`` in level order, columns ``A, B, diff, p, ci_low, ci_high,
         n_A, n_B, note`` with ``diff = mean(A) - mean(B)``, the family-wise adjusted p-value
         and the 95 % simultaneous confidence interval of ``diff``.
+
+    Examples
+    --------
+    >>> data = pd.DataFrame({"y": [1.0, 1.2, 2.1, 1.9, 3.2, 2.8], "group": list("aabbcc")})
+    >>> tukey_hsd(data, "y", "group")[["A", "B", "diff", "p"]].round(3)
+       A  B  diff      p
+    0  a  b  -0.9  0.041
+    1  a  c  -1.9  0.005
+    2  b  c  -1.0  0.031
     """
     frame = clean(data, dv, [between], "tukey_hsd")
     found = levels(frame[between])
@@ -222,6 +248,7 @@ def non_inferiority(
     between: str,
     new: str,
     reference: str,
+    *,
     lower_is_better: bool = True,
     alpha: float = 0.05,
     margin: float | None = None,
@@ -234,7 +261,7 @@ def non_inferiority(
     ``H0: d >= delta`` rejects at level ``alpha``, i.e. when the one-sided ``(1 - alpha)``
     upper confidence bound ``d + t(1 - alpha, df) SE`` lies below ``delta``.  That bound is
     the smallest margin at which ``new`` is non-inferior, the number the paper reports
-    (NOTES section 2).  For a higher-is-better metric the bound is the lower one,
+    (see docs/paper-to-code.md).  For a higher-is-better metric the bound is the lower one,
     ``d - t(1 - alpha, df) SE``, and the test is against ``-delta``.
 
     Parameters
@@ -263,6 +290,14 @@ def non_inferiority(
     pandas.DataFrame
         One row: ``new, reference, estimate, se, df, bound, margin, t, p, noninferior,
         n_new, n_reference, note``; ``t`` and ``p`` are for the margin.
+
+    Examples
+    --------
+    >>> data = pd.DataFrame({"method": ["new"] * 4 + ["old"] * 4,
+    ...                      "error": [1.0, 1.2, 0.9, 1.1, 1.3, 1.5, 1.2, 1.4]})
+    >>> row = non_inferiority(data, "error", "method", "new", "old", margin=0.2).iloc[0]
+    >>> print(round(row["estimate"], 2), round(row["bound"], 3), row["noninferior"])
+    -0.3 -0.123 True
     """
     if not 0.0 < alpha < 1.0:
         raise ValueError(f"non_inferiority: alpha must be in (0, 1), got {alpha!r}")

@@ -2,13 +2,14 @@
 
 Every analysis the paper reports is reproduced in the paper's form -- each
 participant-condition an independent observation, which gives its F(2, 30), F(2, 62) and
-F(1, 41) with 11 participants (NOTES section 2) -- and beside it in the form the
-within-subjects design deserves (repeated-measures ANOVA, a mixed model with a participant
-random intercept, paired non-inferiority).
+F(1, 41) with 11 participants -- and beside it in the form the within-subjects design
+deserves (repeated-measures ANOVA, a mixed model with a participant random intercept,
+paired non-inferiority); see docs/departures.md.
 
-Conditions follow the paper's words: NA, PBA, CASA (Known Goal), "CASA before learning" and
-"CASA after learning" (Unknown Goal and Unknown Skill).  Several trials of one participant in
-one condition are averaged first, so a participant-condition is one observation.
+Conditions follow the paper's words (:data:`casa_core.vocabulary.CONDITIONS`): NA, PBA,
+CASA (Known Goal), "CASA before learning" and "CASA after learning" (Unknown Goal and
+Unknown Skill).  Several trials of one participant in one condition are averaged first, so
+a participant-condition is one observation.  :mod:`casa_core.stats.apa` renders the table.
 """
 
 from __future__ import annotations
@@ -18,70 +19,55 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from casa_core.stats import apa, between, within
-from casa_core.stats._tables import numeric_column, require_columns
-from casa_core.study.protocol import condition_of
+from casa_core.stats import between, within
+from casa_core.stats._rows import STATS_COLUMNS, Rows
+from casa_core.tables import numeric_column, require_columns
+from casa_core.vocabulary import (
+    CASA_AFTER_LEARNING,
+    CASA_BEFORE_LEARNING,
+    CONDITIONS,
+    KNOWN_TASK,
+    METHODS,
+    TASK_CONDITIONS,
+    UNKNOWN_TASKS,
+    condition_of,
+)
 
-STATS_COLUMNS = [
-    "hypothesis",
-    "analysis",
-    "task",
-    "metric",
-    "term",
-    "comparison",
-    "statistic",
-    "df1",
-    "df2",
-    "p",
-    "effect_size",
-    "estimate",
-    "ci_low",
-    "ci_high",
-    "margin",
-    "noninferior",
-    "n",
-    "note",
-]
 METRICS = ["error", "efficiency", "relative_effort", "effort"]
-KNOWN = "known_goal"
-MISSPECIFIED = ["unknown_goal", "unknown_skill"]
-POOLED = "+".join(MISSPECIFIED)
-CASA_BEFORE, CASA_AFTER = "CASA before learning", "CASA after learning"
-# Level order: CASA first, so Tukey pairs and comparisons read "CASA vs NA".
-CONDITION_ORDER = [
-    "CASA",
-    CASA_BEFORE,
-    CASA_AFTER,
-    "NA",
-    "PBA",
-    "NA after learning",
-    "PBA after learning",
-]
+#: The analyses over both misspecified tasks name their task so.
+POOLED = "+".join(UNKNOWN_TASKS)
+#: Level order: the CASA family first, so Tukey pairs and comparisons read "CASA vs NA".
+CONDITION_ORDER = sorted(CONDITIONS, key=lambda c: not c.startswith("CASA"))
 TRIAL_KEYS = ["participant", "task", "method", "phase"]
 LIKERT_KEYS = [*TRIAL_KEYS, "question", "score"]
 ALPHA = 0.05
+
+
+def _condition(method, phase, row, what: str) -> str | None:
+    """:func:`casa_core.vocabulary.condition_of`, its error naming the table and row."""
+    try:
+        return condition_of(method, phase)
+    except ValueError:
+        hint = (
+            " (a missing method: was the text NA read as missing? use "
+            "pandas.read_csv(..., keep_default_na=False))"
+            if pd.isna(method)
+            else ""
+        )
+        raise ValueError(
+            f"{what}: row {row}: method {method!r} in phase {phase!r} is not one of "
+            f"{', '.join(METHODS)}{hint}"
+        ) from None
 
 
 def _conditions(table: pd.DataFrame, what: str) -> pd.DataFrame:
     """``table`` with ``method`` replaced by the condition label, unanalysed phases dropped."""
     require_columns(table, TRIAL_KEYS, what)
     out = table.copy()
-    labels = [condition_of(m, p) for m, p in zip(out["method"], out["phase"], strict=True)]
-    unknown = pd.Series(
-        [lbl is not None and lbl not in CONDITION_ORDER for lbl in labels], out.index
-    )
-    if unknown.any():
-        row = unknown.idxmax()
-        raise ValueError(
-            f"{what}: row {row}: method {table['method'][row]!r} in phase "
-            f"{table['phase'][row]!r} is not one of NA, PBA, CASA"
-            + (
-                " (a missing method: was the text NA read as missing? use "
-                "pandas.read_csv(..., keep_default_na=False))"
-                if pd.isna(table["method"][row])
-                else ""
-            )
-        )
+    labels = [
+        _condition(method, phase, row, what)
+        for row, method, phase in zip(out.index, out["method"], out["phase"], strict=True)
+    ]
     out["method"] = pd.Categorical(labels, categories=CONDITION_ORDER)
     out = out[out["method"].notna()]
     out["participant"] = out["participant"].astype(str)
@@ -102,74 +88,6 @@ def _subset(cells: pd.DataFrame, tasks: list[str], conditions: list[str]) -> pd.
     return chosen
 
 
-class _Rows:
-    """Collects rows of the stats table for one hypothesis, task and metric."""
-
-    def __init__(self) -> None:
-        self.rows: list[dict] = []
-
-    def add(self, **values) -> None:
-        row = {column: np.nan for column in STATS_COLUMNS}
-        row.update({"comparison": "", "note": ""})
-        row.update({k: v for k, v in values.items() if k in STATS_COLUMNS})
-        self.rows.append(row)
-
-    def terms(self, key: dict, table: pd.DataFrame, stat: str, effect: str, extra=None):
-        for _, line in table.iterrows():
-            note = line["note"]
-            if extra is not None:
-                note = "; ".join(x for x in (note, extra(line)) if x)
-            self.add(
-                **key,
-                term=str(line["term"]),
-                statistic=line[stat],
-                df1=line["df1"],
-                df2=line.get("df2", np.nan),
-                p=line["p"],
-                effect_size=line.get(effect, np.nan),
-                n=line["n"],
-                note=note,
-            )
-
-    def tukey(self, key: dict, table: pd.DataFrame) -> None:
-        for _, line in table.iterrows():
-            self.add(
-                **key,
-                term="method",
-                comparison="" if pd.isna(line["A"]) else _versus(line["A"], line["B"]),
-                p=line["p"],
-                estimate=line["diff"],
-                ci_low=line["ci_low"],
-                ci_high=line["ci_high"],
-                n=line["n_A"] + line["n_B"],
-                note=line["note"],
-            )
-
-    def noninferiority(self, key: dict, table: pd.DataFrame, paired: bool) -> None:
-        line = table.iloc[0]
-        design = "paired by participant" if paired else "independent samples, as the paper"
-        note = "; ".join(x for x in (line["note"], design) if x)
-        verdict = line["noninferior"]
-        self.add(
-            **key,
-            term="method",
-            comparison=_versus(line["new"], line["reference"]),
-            statistic=line["t"],
-            df1=line["df"],
-            p=line["p"],
-            estimate=line["estimate"],
-            ci_high=line["bound"],
-            margin=line["margin"],
-            noninferior=verdict if not pd.isna(verdict) else pd.NA,
-            n=line["n_new"] + (0 if paired else line["n_reference"]),
-            note=note,
-        )
-
-
-def _versus(a, b) -> str:
-    return f"{a} vs {b}"
-
-
 def _gg_note(line) -> str:
     return f"Greenhouse-Geisser p = {line['p_gg']:.4g}" if np.isfinite(line["p_gg"]) else ""
 
@@ -181,7 +99,7 @@ def _margin_for(margins: Mapping[str, float] | None, task: str, metric: str) -> 
 
 
 def _objective(
-    out: _Rows, hyp, task_label, metric, data, conditions, covariate, margins, noninf=None
+    out: Rows, hyp, task_label, metric, data, conditions, covariate, margins, noninf=None
 ) -> None:
     """The paper's test and its repeated-measures counterparts on one subset of cells."""
     key = {"hypothesis": hyp, "task": task_label, "metric": metric}
@@ -244,6 +162,7 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
 def analyze_study(
     trials: pd.DataFrame,
     likert: pd.DataFrame | None = None,
+    *,
     margins: Mapping[str, float] | None = None,
     metrics: Sequence[str] = tuple(METRICS),
 ) -> pd.DataFrame:
@@ -273,6 +192,12 @@ def analyze_study(
         the one-sided 95 % upper bound of ``estimate = mean(CASA) - mean(reference)``.
         Skipped tests keep their row with NaN statistics and the reason in ``note``.
 
+    Raises
+    ------
+    ValueError
+        Naming the column or row: a missing column, a value that is not a number, a
+        method that is not one of :data:`casa_core.vocabulary.METHODS`.
+
     Notes
     -----
     H1, Known Goal: ANOVA over NA, PBA, CASA; Tukey; non-inferiority CASA vs PBA.
@@ -283,16 +208,42 @@ def analyze_study(
     H4: per task and question, Friedman over the conditions and Wilcoxon signed-rank tests
     of CASA (after learning, for the misspecified tasks) against each other condition,
     Holm-corrected.
+
+    Examples
+    --------
+    Four participants of the Known Goal task; the other hypotheses keep skipped rows.
+    The non-inferiority rows are the independent (paper) test, then the paired one.
+
+    >>> errors = {"NA": [3.0, 3.4, 2.9, 3.7], "PBA": [2.1, 2.6, 2.4, 2.3],
+    ...           "CASA": [1.2, 1.9, 1.4, 1.3]}
+    >>> trials = pd.DataFrame(
+    ...     [{"participant": f"P{i}", "task": "known_goal", "method": method,
+    ...       "phase": "no_misspecification", "error": value}
+    ...      for method, values in errors.items() for i, value in enumerate(values)])
+    >>> table = analyze_study(trials, metrics=["error"])
+    >>> h1 = table[table["hypothesis"] == "H1"]
+    >>> h1[["analysis", "comparison", "statistic", "df1", "df2", "estimate"]].round(2)
+             analysis   comparison  statistic  df1  df2  estimate
+    0           anova                   35.13  2.0  9.0       NaN
+    1           tukey   CASA vs NA        NaN  NaN  NaN      -1.8
+    2           tukey  CASA vs PBA        NaN  NaN  NaN      -0.9
+    3           tukey    NA vs PBA        NaN  NaN  NaN       0.9
+    4        rm_anova                   57.18  2.0  6.0       NaN
+    5         mixedlm                  114.35  2.0  NaN       NaN
+    6  noninferiority  CASA vs PBA        NaN  6.0  NaN      -0.9
+    7  noninferiority  CASA vs PBA        NaN  3.0  NaN      -0.9
+    >>> print(table[table["hypothesis"] == "H3"]["note"].iloc[0])  # doctest: +ELLIPSIS
+    no trials of unknown_goal+unknown_skill in conditions CASA after learning, NA; ...
     """
     cells_by_metric = _prepare_trials(trials, list(metrics))
-    out = _Rows()
+    out = Rows()
     for metric, cells in cells_by_metric.items():
-        known = [KNOWN]
-        h1 = ["CASA", "NA", "PBA"]
+        known = [KNOWN_TASK]
+        h1 = sorted(TASK_CONDITIONS[KNOWN_TASK])
         _objective(
             out,
             "H1",
-            KNOWN,
+            KNOWN_TASK,
             metric,
             _subset(cells, known, h1),
             h1,
@@ -300,9 +251,10 @@ def analyze_study(
             margins,
             noninf=("CASA", "PBA"),
         )
-        h2 = [CASA_BEFORE, "NA", "PBA"]
-        _objective(out, "H2", POOLED, metric, _subset(cells, MISSPECIFIED, h2), h2, True, margins)
-        for task in MISSPECIFIED:
+        misspecified = list(UNKNOWN_TASKS)
+        h2 = [CASA_BEFORE_LEARNING, "NA", "PBA"]
+        _objective(out, "H2", POOLED, metric, _subset(cells, misspecified, h2), h2, True, margins)
+        for task in misspecified:
             _objective(
                 out,
                 "H2",
@@ -312,11 +264,11 @@ def analyze_study(
                 h2,
                 False,
                 margins,
-                noninf=(CASA_BEFORE, "NA"),
+                noninf=(CASA_BEFORE_LEARNING, "NA"),
             )
-        h3 = [CASA_AFTER, "NA"]
-        _objective(out, "H3", POOLED, metric, _subset(cells, MISSPECIFIED, h3), h3, True, margins)
-        for task in MISSPECIFIED:
+        h3 = [CASA_AFTER_LEARNING, "NA"]
+        _objective(out, "H3", POOLED, metric, _subset(cells, misspecified, h3), h3, True, margins)
+        for task in misspecified:
             _objective(out, "H3", task, metric, _subset(cells, [task], h3), h3, False, margins)
     if likert is not None:
         _subjective(out, likert)
@@ -334,166 +286,26 @@ def _prepare_trials(trials: pd.DataFrame, metrics: list[str]) -> dict[str, pd.Da
     return {metric: _cell_means(frame, metric) for metric in metrics}
 
 
-def _subjective(out: _Rows, likert: pd.DataFrame) -> None:
+def _subjective(out: Rows, likert: pd.DataFrame) -> None:
     require_columns(likert, LIKERT_KEYS, "likert table")
     frame = _conditions(likert, "likert table")
     frame["score"] = numeric_column(frame, "score", "likert table")
     questions = sorted(frame["question"].dropna().unique(), key=str)
-    for task in [KNOWN, *MISSPECIFIED]:
-        wanted = ["CASA", "NA", "PBA"] if task == KNOWN else [CASA_AFTER, CASA_BEFORE, "NA", "PBA"]
-        target = "CASA" if task == KNOWN else CASA_AFTER
+    for task in [KNOWN_TASK, *UNKNOWN_TASKS]:
+        if task == KNOWN_TASK:
+            wanted, target = sorted(TASK_CONDITIONS[task]), "CASA"
+        else:
+            wanted = sorted(TASK_CONDITIONS[task])
+            target = CASA_AFTER_LEARNING
         for question in questions:
             data = frame[(frame["task"] == task) & (frame["question"] == question)]
             data = _subset(data, [task], wanted)
             key = {"hypothesis": "H4", "task": task, "metric": question}
-            line = within.friedman(data, "score", "method", "participant").iloc[0]
-            out.add(
-                **key,
-                analysis="friedman",
-                term="method",
-                statistic=line["Q"],
-                df1=line["df1"],
-                p=line["p"],
-                effect_size=line["W"],
-                n=line["n"],
-                note=line["note"],
+            out.friedman(key, within.friedman(data, "score", "method", "participant").iloc[0])
+            others = [c for c in wanted if c != target]
+            out.wilcoxon(
+                key,
+                within.wilcoxon_holm(
+                    data, "score", "method", "participant", target=target, others=others
+                ),
             )
-            table = within.wilcoxon_holm(
-                data, "score", "method", "participant", target, [c for c in wanted if c != target]
-            )
-            family = int(table["p_unc"].notna().sum())
-            for _, row in table.iterrows():
-                note = row["note"]
-                if np.isfinite(row["p_unc"]):
-                    note = f"p Holm-adjusted over {family}; unadjusted p = {row['p_unc']:.4g}"
-                    note = "; ".join(x for x in (note, row["note"]) if x)
-                out.add(
-                    **key,
-                    analysis="wilcoxon",
-                    term="method",
-                    comparison=_versus(row["A"], row["B"]),
-                    statistic=row["V"],
-                    p=row["p"],
-                    effect_size=row["rbc"],
-                    estimate=row["median_diff"],
-                    n=row["n"],
-                    note=note,
-                )
-
-
-_TITLES = {
-    "H1": "H1: no misspecification (Known Goal)",
-    "H2": "H2: misspecification, CASA before learning",
-    "H3": "H3: misspecification, CASA after learning",
-    "H4": "H4: subjective (Likert)",
-}
-_ANALYSIS_NAMES = {
-    "anova": "ANOVA",
-    "ancova": "ANCOVA (task as covariate)",
-    "tukey": "Tukey HSD",
-    "noninferiority": "non-inferiority",
-    "rm_anova": "repeated-measures ANOVA",
-    "mixedlm": "mixed model (participant intercept)",
-    "friedman": "Friedman",
-    "wilcoxon": "Wilcoxon signed-rank",
-}
-
-
-def _apa(row: pd.Series) -> str:
-    """One result in APA style; skipped tests say why."""
-    kind = row["analysis"]
-    if kind in ("anova", "ancova", "rm_anova", "mixedlm", "friedman") and not np.isfinite(
-        row["statistic"]
-    ):
-        return f"skipped: {row['note']}"
-    if kind in ("anova", "ancova"):
-        return f"{apa.f_test(row.statistic, row.df1, row.df2, row.p)}, ηp² = " + apa.proportion(
-            row.effect_size
-        )
-    if kind == "rm_anova":
-        return f"{apa.f_test(row.statistic, row.df1, row.df2, row.p)}, ηG² = " + apa.proportion(
-            row.effect_size
-        )
-    if kind == "mixedlm":
-        return apa.chi2_test(row.statistic, row.df1, row.p)
-    if kind == "friedman":
-        return f"{apa.chi2_test(row.statistic, row.df1, row.p)}, W = " + apa.proportion(
-            row.effect_size
-        )
-    if (
-        not np.isfinite(row["estimate"])
-        and kind != "wilcoxon"
-        or (kind == "wilcoxon" and not np.isfinite(row["statistic"]))
-    ):
-        return f"skipped: {row['note']}"
-    if kind == "tukey":
-        return (
-            f"diff = {row.estimate:.3g}, 95% CI [{row.ci_low:.3g}, {row.ci_high:.3g}], "
-            f"{apa.p_value(row.p)}"
-        )
-    if kind == "noninferiority":
-        text = f"diff = {row.estimate:.3g}, one-sided 95% bound = {row.ci_high:.3g}"
-        if np.isfinite(row["margin"]):
-            verdict = "non-inferior" if row["noninferior"] else "not shown non-inferior"
-            text += f"; margin {row.margin:.3g}: {verdict}, {apa.p_value(row.p)}"
-        return text
-    if kind == "wilcoxon":
-        return f"V = {row.statistic:.4g}, {apa.p_value(row.p)} (Holm), r = " + apa.proportion(
-            row.effect_size
-        )
-    return ""
-
-
-def report_markdown(table: pd.DataFrame) -> str:
-    """An APA-style Markdown report of the stats table from :func:`analyze_study`.
-
-    One section per hypothesis, one table row per test, e.g.
-    ``F(2, 30) = 104.93, p < .001, ηp² = .87``.
-
-    Parameters
-    ----------
-    table : pandas.DataFrame
-        The output of :func:`analyze_study` (or stats.csv read back).
-
-    Returns
-    -------
-    str
-        The Markdown text.
-    """
-    require_columns(table, STATS_COLUMNS, "stats table")
-    # stats.csv read back with pandas turns empty text into NaN.
-    table = table.fillna({"note": "", "comparison": "", "term": ""})
-    lines = [
-        "# CASA user study: statistics",
-        "",
-        "Paper form: each participant-condition an independent observation (ANOVA, ANCOVA, "
-        "Tukey HSD, independent non-inferiority). Within-subjects form: repeated-measures "
-        "ANOVA, a mixed model with a participant random intercept (Wald χ²) and paired "
-        "non-inferiority. Non-inferiority reports the one-sided 95% upper bound of "
-        "mean(CASA) - mean(reference), the smallest margin at which CASA is non-inferior "
-        "(lower is better for every metric).",
-    ]
-    for hypothesis, title in _TITLES.items():
-        part = table[table["hypothesis"] == hypothesis]
-        if part.empty:
-            continue
-        lines += [
-            "",
-            f"## {title}",
-            "",
-            "| Task | Metric | Analysis | Term | Result |",
-            "| --- | --- | --- | --- | --- |",
-        ]
-        for _, row in part.iterrows():
-            term = row["comparison"] or row["term"]
-            if row["analysis"] == "noninferiority" and "paired" in str(row["note"]):
-                term += " (paired)"
-            cells = [
-                row["task"],
-                row["metric"],
-                _ANALYSIS_NAMES.get(row["analysis"], ""),
-                term,
-                _apa(row),
-            ]
-            lines.append("| " + " | ".join(str(c).replace("|", "/") for c in cells) + " |")
-    return "\n".join(lines) + "\n"

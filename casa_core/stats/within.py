@@ -70,6 +70,17 @@ def rm_anova(
         One row per term (main effects, then the interaction), columns ``term, F, df1, df2,
         p, p_gg, eps, ng2, n, note``: uncorrected p, Greenhouse-Geisser corrected p and
         epsilon, generalized eta squared, and the number of complete participants.
+
+    Examples
+    --------
+    >>> data = pd.DataFrame({"subject": ["s1", "s2", "s3", "s4"] * 3,
+    ...                      "condition": ["a"] * 4 + ["b"] * 4 + ["c"] * 4,
+    ...                      "y": [1.0, 1.5, 1.2, 1.1, 2.0, 2.2, 2.5, 1.9,
+    ...                            3.1, 2.9, 3.6, 3.0]})
+    >>> table = rm_anova(data, "y", "condition", "subject")
+    >>> table[["term", "F", "df1", "df2", "p_gg", "ng2"]].round(3)
+            term       F  df1  df2   p_gg    ng2
+    0  condition  79.605  2.0  6.0  0.002  0.922
     """
     factors = _as_list(within)
     if not 1 <= len(factors) <= 2:
@@ -146,6 +157,15 @@ def mixedlm(data: pd.DataFrame, dv: str, fixed: str | Sequence[str], subject: st
     -------
     pandas.DataFrame
         One row per fixed factor, columns ``term, chi2, df1, p, n, n_groups, note``.
+
+    Examples
+    --------
+    >>> y = [1.0, 1.5, 1.2, 1.1, 2.0, 2.2, 2.5, 1.9, 3.1, 2.9, 3.6, 3.0]
+    >>> data = pd.DataFrame({"y": y, "condition": [c for c in "abc" for _ in range(4)]})
+    >>> data["subject"] = [f"s{i % 4 + 1}" for i in range(12)]
+    >>> mixedlm(data, "y", "condition", "subject")[["term", "chi2", "df1", "n"]].round(1)
+            term   chi2  df1   n
+    0  condition  159.2  2.0  12
     """
     factors = _as_list(fixed)
     frame = clean(data, dv, [*factors, subject], "mixedlm")
@@ -213,6 +233,18 @@ def friedman(data: pd.DataFrame, dv: str, within: str, subject: str) -> pd.DataF
         One row, columns ``Q, df1, p, W, n, note``: the tie-corrected chi-square statistic,
         ``k - 1`` degrees of freedom, p-value, Kendall's ``W = Q / (n (k - 1))`` and the
         number of complete participants.
+
+    Examples
+    --------
+    Three conditions rated by four participants, one column per condition:
+
+    >>> wide = pd.DataFrame({"a": [1.0, 1.5, 1.2, 1.1], "b": [2.0, 2.2, 2.5, 1.9],
+    ...                      "c": [3.1, 2.9, 3.6, 3.0]}, index=["s1", "s2", "s3", "s4"])
+    >>> data = wide.rename_axis("subject").reset_index().melt(
+    ...     "subject", var_name="condition", value_name="y")
+    >>> friedman(data, "y", "condition", "subject")[["Q", "df1", "p", "W", "n"]].round(4)
+         Q  df1       p    W  n
+    0  8.0    2  0.0183  1.0  4
     """
     frame = clean(data, dv, [within, subject], "friedman")
     try:
@@ -239,6 +271,11 @@ def holm(pvalues: Sequence[float]) -> np.ndarray:
     """Holm's step-down adjustment of a family of p-values (R's ``p.adjust(p, "holm")``).
 
     NaN entries are left out of the family and stay NaN.
+
+    Examples
+    --------
+    >>> holm([0.01, 0.04, float("nan"), 0.03]).round(3).tolist()
+    [0.03, 0.06, nan, 0.06]
     """
     p = np.asarray(pvalues, dtype=float)
     out = np.full(p.shape, np.nan)
@@ -253,6 +290,7 @@ def wilcoxon_holm(
     dv: str,
     within: str,
     subject: str,
+    *,
     target: str,
     others: Sequence[str] | None = None,
 ) -> pd.DataFrame:
@@ -265,9 +303,9 @@ def wilcoxon_holm(
     Parameters
     ----------
     data : pandas.DataFrame
-        One row per observation (long format).
+        Long format: one row per participant, condition and (repeated) observation.
     dv, within, subject : str
-        Score column, condition column and participant column.
+        The columns of the scores, the conditions and the participants.
     target : str
         The condition compared with every other (the paper: CASA after learning).
     others : sequence of str, optional
@@ -280,6 +318,16 @@ def wilcoxon_holm(
         ``A = target``; ``V`` is the sum of ranks of positive differences ``A - B`` (R's V);
         ``p`` is Holm-adjusted over the rows; ``rbc`` the matched-pairs rank-biserial
         correlation; ``n`` the number of pairs.
+
+    Examples
+    --------
+    >>> data = pd.DataFrame({"participant": [f"P{i}" for i in range(6)] * 2,
+    ...                      "condition": ["CASA"] * 6 + ["NA"] * 6,
+    ...                      "score": [6, 7, 5, 6, 6, 7, 3, 4, 4, 2, 5, 3]})
+    >>> table = wilcoxon_holm(data, "score", "condition", "participant", target="CASA")
+    >>> table[["A", "B", "V", "p", "rbc", "n"]].round(4)
+          A   B     V       p  rbc  n
+    0  CASA  NA  21.0  0.0345  1.0  6
     """
     frame = clean(data, dv, [within, subject], "wilcoxon_holm")
     found = levels(frame[within])

@@ -30,8 +30,8 @@ import numpy as np
 import pandas as pd
 
 from casa_core.robot.keys import keys_to_action
+from casa_core.vocabulary import QUESTIONS
 
-QUESTIONS = ("understood", "effortless", "useful")
 FIGHT_ANGLE = np.deg2rad(45.0)
 
 

@@ -11,7 +11,7 @@ and the participant presses against it, so assisting for the wrong intent costs
 effort, as it does for a person.
 
 Population parameters (fixed before any result was looked at; distributions in
-``config/config.yaml`` under ``participants``) and their sources:
+``config/config.yaml`` under ``simulation.population``) and their sources:
 
 - ``reaction_time``: delay from seeing the arm to a changed key, s. The Model
   Human Processor puts a simple perceive-decide-press cycle at about 0.24 s
@@ -45,14 +45,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from casa_core.robot.keys import KEYS
+from casa_core.robot.keys import AXIS_KEYS
 
 # Rotation error is compared with position error at this many metres per radian.
 ROT_TO_METRES = 0.1
 LOOKAHEAD = 0.04  # m of path ahead that the participant steers toward
 DONE_ROT_TOLERANCE = 0.15  # rad
-# The (plus, minus) key of each axis of [x, y, z, rot], in the key map's order.
-AXIS_KEYS = tuple(zip(KEYS[::2], KEYS[1::2], strict=True))
 
 
 @dataclass(frozen=True)
@@ -114,7 +112,12 @@ class SimulatedParticipant:
     """
 
     def __init__(
-        self, params: ParticipantParams, reference, rng: np.random.Generator, tick: float = 0.05
+        self,
+        params: ParticipantParams,
+        reference,
+        *,
+        rng: np.random.Generator,
+        tick: float = 0.05,
     ):
         self.params = params
         self.reference = np.asarray(reference, dtype=float)[:, 1:5]

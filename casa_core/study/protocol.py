@@ -18,14 +18,13 @@ from dataclasses import dataclass
 from itertools import permutations
 from typing import TYPE_CHECKING
 
+from casa_core.vocabulary import METHODS, UNKNOWN_TASKS
+
 if TYPE_CHECKING:
     import pandas as pd
 
-METHODS = ("NA", "PBA", "CASA")
+#: The 6 orders of the methods; participant i uses the (i mod 6)-th.
 METHOD_ORDERS = tuple(permutations(METHODS))
-UNKNOWN_TASKS = ("unknown_goal", "unknown_skill")
-#: Phases whose trials are not study conditions (practice and demonstrations).
-UNANALYSED_PHASES = ("familiarization", "demonstration")
 #: Seconds at the end of a CASA trial over which every beta_hat must stay below epsilon.
 DETECTION_WINDOW = 3.0
 
@@ -44,20 +43,6 @@ class TrialSpec:
         """File stem of the trial's log, unique within a participant."""
         suffix = f"_{self.repeat + 1}" if self.phase == "demonstration" else ""
         return f"{self.task}_{self.phase}_{self.method}{suffix}"
-
-
-def condition_of(method: str, phase: str) -> str | None:
-    """The paper's name for a method in a phase, or None for phases that are not analysed.
-
-    CASA in ``before_learning`` / ``after_learning`` is "CASA before learning" / "CASA after
-    learning"; NA and PBA keep their names in ``no_misspecification`` and ``before_learning``.
-    Familiarization and demonstration trials are not analysed.
-    """
-    if phase in UNANALYSED_PHASES:
-        return None
-    if method == "CASA" and phase == "before_learning":
-        return "CASA before learning"
-    return f"{method} after learning" if phase == "after_learning" else method
 
 
 def method_order(participant_index: int) -> tuple[str, ...]:

@@ -17,11 +17,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from casa_core import logs, metrics
+from casa_core import metrics
+from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_trial, write_surveys
+from casa_core.scene import Scene
 from casa_core.study import likert, protocol
+from casa_core.study.closed_loop import known_goal_intents, run_trial, trial_intents
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
-from casa_core.study.trial import run_trial, trial_intents
 from casa_core.tasks import intended_trajectory
+from casa_core.vocabulary import UNANALYSED_PHASES, UNKNOWN_TASKS
 
 #: Name of the intent learned for each unknown task (colours follow the goal's name).
 LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
@@ -47,7 +50,7 @@ def assistant_options(settings: dict) -> dict:
 
 def _run(scene, spec, settings, params, rng, pid, sim, intents=None):
     reference = intended_trajectory(spec.task, scene)
-    source = SimulatedParticipant(params, reference, rng, tick=float(scene["teleop"]["dt"]))
+    source = SimulatedParticipant(params, reference, rng=rng, tick=scene.teleop.dt)
     result = run_trial(
         scene,
         spec.task,
@@ -66,7 +69,8 @@ def _run(scene, spec, settings, params, rng, pid, sim, intents=None):
 
 def simulate_before_learning(
     index: int,
-    scene: dict,
+    scene: Scene,
+    *,
     simulation: dict,
     out_dir: Path,
     params: ParticipantParams | None = None,
@@ -84,7 +88,7 @@ def simulate_before_learning(
     pid = pid or participant_id(index)
     params = params or participant_params(index, simulation)
     seed = int(simulation["seed"])
-    epsilon = float(simulation.get("epsilon", 1.0))
+    epsilon = float(simulation["epsilon"])
     out_dir = Path(out_dir)
     specs = protocol.before_learning(index)
     written = []
@@ -100,7 +104,7 @@ def simulate_before_learning(
             result.write(out_dir / spec.stem)
             written.append(out_dir / spec.stem)
         stream = len(specs) + 1
-        for task in protocol.UNKNOWN_TASKS:
+        for task in UNKNOWN_TASKS:
             if simulation["demonstrations_when"] == "detected" and not detected.get(task):
                 continue
             for spec in protocol.demonstrations(task, simulation["demonstrations"]):
@@ -113,7 +117,7 @@ def simulate_before_learning(
 
 
 def learn_from_demonstrations(
-    demos_dir: Path, task: str, scene: dict, seed: int, library: Path, pid: str
+    demos_dir: Path, task: str, *, scene: Scene, seed: int, library: Path, pid: str
 ) -> dict:
     """Learn the intent of ``task`` from the participant's demonstrations into ``library``.
 
@@ -121,8 +125,9 @@ def learn_from_demonstrations(
     endpoint_error_m, final_tilt_deg, train_seconds``; empty values when the
     participant gave no demonstrations of the task.
     """
-    from casa_core.irl import learning_evidence
-    from casa_core.library import learn_to_library, load_intent, read_demonstrations
+    from casa_core.learning.from_logs import learn_to_library, read_demonstrations
+    from casa_core.library import load_intent
+    from casa_core.study.learning_evidence import learning_evidence, scene_objects
 
     name = LEARNED_NAMES[task]
     row = {
@@ -137,7 +142,13 @@ def learn_from_demonstrations(
     if not demo_stems:
         return row
     path, _history, seconds = learn_to_library(
-        demos_dir, name, library, scene, seed=seed, task=task, participant=pid
+        demos_dir,
+        name,
+        library=library,
+        objects=scene_objects(scene),
+        seed=seed,
+        task=task,
+        participant=pid,
     )
     demos, _ = read_demonstrations(demos_dir, task)
     evidence = learning_evidence(load_intent(path).intent, demos)
@@ -147,7 +158,8 @@ def learn_from_demonstrations(
 
 def simulate_after_learning(
     index: int,
-    scene: dict,
+    scene: Scene,
+    *,
     simulation: dict,
     learned: list[Path],
     before_dir: Path,
@@ -172,24 +184,27 @@ def simulate_after_learning(
                 result.write(out_dir / spec.stem)
                 written.append(out_dir / spec.stem)
     surveys = simulated_surveys(
-        pid, [Path(before_dir), out_dir], scene, np.random.default_rng([seed, index, LIKERT_STREAM])
+        pid,
+        [Path(before_dir), out_dir],
+        scene=scene,
+        rng=np.random.default_rng([seed, index, LIKERT_STREAM]),
     )
-    logs.write_surveys(out_dir / logs.SURVEYS_NAME, surveys)
+    write_surveys(out_dir / SURVEYS_NAME, surveys)
     return written
 
 
 def simulated_surveys(
-    pid: str, folders: list[Path], scene: dict, rng: np.random.Generator
+    pid: str, folders: list[Path], *, scene: Scene, rng: np.random.Generator
 ) -> pd.DataFrame:
     """Likert answers (:mod:`casa_core.study.likert`) for every condition of one participant."""
-    dt = float(scene["teleop"]["dt"])
+    dt = scene.teleop.dt
     trials = {}
     for folder in folders:
         for json_path in sorted(Path(folder).glob("*.json")):
-            meta, frame = logs.read_trial(json_path.with_suffix(""))
-            if meta["phase"] in protocol.UNANALYSED_PHASES:
+            meta, frame = read_trial(json_path.with_suffix(""))
+            if meta["phase"] in UNANALYSED_PHASES:
                 continue
-            measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt)
+            measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt=dt)
             trials[(meta["task"], meta["method"], meta["phase"])] = (measured, frame)
     bias = 0.5 * rng.standard_normal()
     rows = []
@@ -213,7 +228,7 @@ def simulated_surveys(
                     "source": "simulated",
                 }
             )
-    return pd.DataFrame(rows, columns=[*logs.SURVEY_COLUMNS, "source"])
+    return pd.DataFrame(rows, columns=[*SURVEY_COLUMNS, "source"])
 
 
 #: The case study's expert: short delay, little noise, no lapses or wrong keys.
@@ -229,7 +244,7 @@ EXPERT = ParticipantParams(
 
 
 def run_case_study(
-    scene: dict, case_study: dict, work_dir: Path
+    scene: Scene, case_study: dict, *, work_dir: Path
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The expert case study (paper, Sec. IV) and the arbitration comparison.
 
@@ -250,7 +265,6 @@ def run_case_study(
     from casa_core.datasets import build_tables
     from casa_core.intents import GoalIntent
     from casa_core.study.arbitration_comparison import compare_arbitrations
-    from casa_core.study.trial import known_goal_intents
 
     work_dir = Path(work_dir)
     settings = {
@@ -258,26 +272,41 @@ def run_case_study(
         "max_duration": case_study["max_duration"],
         "demonstrations": 5,
         "demonstrations_when": "always",
-        "epsilon": case_study.get("epsilon", 1.0),
+        "epsilon": case_study["epsilon"],
         **assistant_options(case_study),
     }
     before = work_dir / "logs" / "before"
-    simulate_before_learning(0, scene, settings, before, params=EXPERT, pid="expert")
+    simulate_before_learning(
+        0, scene, simulation=settings, out_dir=before, params=EXPERT, pid="expert"
+    )
     learned = []
-    for task in protocol.UNKNOWN_TASKS:
+    for task in UNKNOWN_TASKS:
         learn_from_demonstrations(
-            before, task, scene, case_study["seed"], work_dir / "library", "expert"
+            before,
+            task,
+            scene=scene,
+            seed=case_study["seed"],
+            library=work_dir / "library",
+            pid="expert",
         )
         learned.append(work_dir / "library" / f"{LEARNED_NAMES[task]}.intent.json")
     after = work_dir / "logs" / "after"
-    simulate_after_learning(0, scene, settings, learned, before, after, params=EXPERT, pid="expert")
-    (after / logs.SURVEYS_NAME).unlink()  # the expert answers no survey
+    simulate_after_learning(
+        0,
+        scene,
+        simulation=settings,
+        learned=learned,
+        before_dir=before,
+        out_dir=after,
+        params=EXPERT,
+        pid="expert",
+    )
+    (after / SURVEYS_NAME).unlink()  # the expert answers no survey
     steps = build_tables(work_dir / "logs", scene, dataset="case_study").steps
     steps = steps[steps["method"].isin(["PBA", "CASA"]) & (steps["phase"] != "demonstration")]
     columns = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
     steps = steps[columns].reset_index(drop=True)
 
-    start = np.array([*scene["start"]["position"], scene["start"]["rot"]], dtype=float)
-    trajectory = GoalIntent("red", scene["goals"]["red"]).optimal_trajectory(start, 15.0)
+    trajectory = GoalIntent("red", scene.goals["red"]).optimal_trajectory(scene.start_state, 15.0)
     arbitration = compare_arbitrations(Assistant(known_goal_intents(scene)), trajectory)
     return steps, arbitration

@@ -1,32 +1,42 @@
-# Config validation, dataset discovery and the list of outputs. No rules here.
-import json
+# Config validation, the study's vocabulary, dataset discovery and the list of outputs.
+# No rules here.
+import os
 import re
 from pathlib import Path
 
-import yaml
+from casa_core import config as casa_config
+from casa_core import vocabulary
+from casa_core.io.atomic import atomic_write_text
 
-from snakemake.utils import validate
+
+def config_layers():
+    """The config files in the order Snakemake merges them: the Snakefile's, then --configfile's."""
+    settings = workflow.config_settings
+    given = list(settings.configfiles)
+    own = [] if settings.replace_workflow_config else workflow.configfiles[len(given) :]
+    shown = []
+    for path in map(str, [*own, *given]):
+        relative = os.path.relpath(path)
+        shown.append(path if relative.startswith("..") else relative)
+    return shown
 
 
-validate(config, "../schemas/config.schema.yaml")
-# `--config allow_invalid=true` gives the string "true"; the schema admits only these spellings.
-config["allow_invalid"] = str(config["allow_invalid"]).lower() == "true"
-config["simulate"] = str(config["simulate"]).lower() == "true"
+# Validated once, here (casa_core/config.schema.yaml: every key, its type, range and
+# default); each problem names the file, the dotted key and the rule it breaks.
+config.clear()
+config.update(casa_config.load_config(*config_layers(), overrides=workflow.config_settings.config))
 
 
 def effective_config_file(path=Path("data/interim/config.yaml")):
     """The validated config, --config overrides and schema defaults included, for the package.
 
-    The package commands read a config file; this one is what Snakemake itself
-    sees, so that `--config KEY=VALUE` reaches them too. It is rewritten (atomically)
-    only when its content changes, so that an unchanged config reruns nothing.
+    The package commands read a config file; this one is what the workflow itself
+    sees, so that `--config KEY=VALUE` reaches them too. It is rewritten only when its
+    content changes, so that an unchanged config reruns nothing.
     """
-    text = yaml.safe_dump(json.loads(json.dumps(config)), sort_keys=True)
+    text = casa_config.config_text(config)
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f".{path.name}.partial")
-        partial.write_text(text, encoding="utf-8")
-        partial.replace(path)
+        atomic_write_text(path, text)
     return str(path)
 
 
@@ -44,6 +54,8 @@ FIGURES = Path("figures")
 DATASET_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 # Outputs of the dataset-independent rules live here; no dataset may take the name.
 RESERVED = ("case_study",)
+# The tasks whose intents the simulated participants teach (workflow/rules/study.smk).
+UNKNOWN_TASKS = vocabulary.UNKNOWN_TASKS
 # Datasets that rules of this workflow write into data/raw (the simulated study).
 GENERATED = ("simulated",) if SIMULATE else ()
 
@@ -109,5 +121,7 @@ def all_outputs():
     outputs.append(str(FIGURES / "scene.png"))
     if CASE_STUDY:
         outputs += [str(PROCESSED / "case_study" / f) for f in ("steps.csv", "arbitration.csv")]
-        outputs += [str(FIGURES / f"{f}.{e}") for f in ("case_study", "arbitration") for e in ("pdf", "png")]
+        outputs += [
+            str(FIGURES / f"{f}.{e}") for f in ("case_study", "arbitration") for e in ("pdf", "png")
+        ]
     return outputs

@@ -9,13 +9,13 @@ rule validate:
         raw_files,
     output:
         PROCESSED / "{ds}" / "validation.csv",
-    params:
-        raw=lambda wildcards: RAW / wildcards.ds,
-        allow_invalid=allow_invalid_flag,
     log:
         "logs/validate/{ds}.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        raw=lambda wildcards: RAW / wildcards.ds,
+        allow_invalid=allow_invalid_flag,
     shell:
         "casa validate {params.raw} --report {output} {params.allow_invalid} 2>&1 | tee {log}"
 
@@ -29,14 +29,14 @@ rule process:
         trials=PROCESSED / "{ds}" / "trials.csv",
         steps=PROCESSED / "{ds}" / "steps.csv",
         likert=PROCESSED / "{ds}" / "likert.csv",
-    params:
-        raw=lambda wildcards: RAW / wildcards.ds,
-        out=lambda wildcards: PROCESSED / wildcards.ds,
-        allow_invalid=allow_invalid_flag,
     log:
         "logs/process/{ds}.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        raw=lambda wildcards: RAW / wildcards.ds,
+        out=lambda wildcards: PROCESSED / wildcards.ds,
+        allow_invalid=allow_invalid_flag,
     shell:
         "casa process {params.raw} --out {params.out} --scene {input.scene} "
         "--dataset {wildcards.ds} {params.allow_invalid} > {log} 2>&1"

@@ -15,12 +15,12 @@ rule figure_objective:
             category="{ds}",
             subcategory="figures",
         ),
-    params:
-        stem=lambda wildcards: FIGURES / wildcards.ds / "objective",
     log:
         "logs/figures/{ds}/objective.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        stem=lambda wildcards: FIGURES / wildcards.ds / "objective",
     shell:
         "casa figure objective --trials {input.trials} --stats {input.stats} "
         "--out {params.stem} > {log} 2>&1"
@@ -37,12 +37,12 @@ rule figure_likert:
             category="{ds}",
             subcategory="figures",
         ),
-    params:
-        stem=lambda wildcards: FIGURES / wildcards.ds / "likert",
     log:
         "logs/figures/{ds}/likert.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        stem=lambda wildcards: FIGURES / wildcards.ds / "likert",
     shell:
         "casa figure likert --likert {input.likert} --out {params.stem} > {log} 2>&1"
 
@@ -70,12 +70,12 @@ rule figure_arbitration:
             caption="../report/arbitration.rst",
             category="case study",
         ),
-    params:
-        stem=FIGURES / "arbitration",
     log:
         "logs/figures/arbitration.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        stem=FIGURES / "arbitration",
     shell:
         "casa figure arbitration --arbitration {input.arbitration} --out {params.stem} "
         "> {log} 2>&1"
@@ -91,11 +91,11 @@ rule figure_case_study:
             caption="../report/case_study.rst",
             category="case study",
         ),
-    params:
-        stem=FIGURES / "case_study",
     log:
         "logs/figures/case_study.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        stem=FIGURES / "case_study",
     shell:
         "casa figure case_study --steps {input.steps} --out {params.stem} > {log} 2>&1"

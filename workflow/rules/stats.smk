@@ -13,12 +13,12 @@ rule stats:
             category="{ds}",
             subcategory="statistics",
         ),
-    params:
-        likert=likert_option,
     log:
         "logs/stats/{ds}.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        likert=likert_option,
     shell:
         "casa stats --trials {input.trials} {params.likert} "
         "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"

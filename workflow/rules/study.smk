@@ -6,7 +6,6 @@
 PARTICIPANTS = list(range(1, config["simulation"]["participants"] + 1))
 SIMULATED = RAW / "simulated"
 INTENTS = PROCESSED / "simulated" / "intents"
-UNKNOWN_TASKS = ("unknown_goal", "unknown_skill")
 
 
 wildcard_constraints:
@@ -53,12 +52,12 @@ rule simulate_after_learning:
         libraries=expand(INTENTS / "p{{p}}" / "{task}", task=UNKNOWN_TASKS),
     output:
         directory(SIMULATED / "p{p}" / "after"),
-    params:
-        library=lambda wildcards: INTENTS / f"p{wildcards.p}",
     log:
         "logs/simulate/p{p}_after.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        library=lambda wildcards: INTENTS / f"p{wildcards.p}",
     shell:
         "casa simulate after --config {input.config} --participant {wildcards.p} "
         "--before {input.before} --library {params.library} --out {output} > {log} 2>&1"

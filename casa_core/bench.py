@@ -1,4 +1,8 @@
-"""``casa bench``: how long one assistance step takes, and how it grows with the intents.
+"""``casa bench``: every benchmark of the package.
+
+How long one assistance step takes and how it grows with the intents
+(:func:`assistance_benchmarks`), and how many simulated seconds a whole CASA trial
+runs per second (:func:`trial_realtime_factor`); :func:`run_benchmarks` runs them all.
 
 One *assistance step* is what the assistant does at an inference step (twice per
 second): :meth:`Assistant.update` with the state reached (prefix costs, optimal
@@ -17,7 +21,8 @@ deep copy of it.
 
 Times are CPU time of the measuring thread (``time.thread_time_ns``), not wall
 time: the targets are for one core, and on a machine shared with other jobs wall
-time would also count the time the thread waited for a core.
+time would also count the time the thread waited for a core. A whole trial is timed
+in CPU time of the process, pybullet included.
 """
 
 from __future__ import annotations
@@ -30,7 +35,11 @@ import numpy as np
 
 from casa_core.assistant import Assistant
 from casa_core.intents import GoalIntent
-from casa_core.tasks import intended_trajectory
+from casa_core.robot.sim import ArmSimulation
+from casa_core.scene import REQUIRED_GOALS, Scene
+from casa_core.study.closed_loop import run_trial
+from casa_core.study.key_sources import WaypointKeys
+from casa_core.tasks import intended_trajectory, task_waypoints
 
 #: Numbers of goal intents of the scaling measurement.
 SCALING_SIZES = (2, 4, 8, 16, 32, 64)
@@ -38,19 +47,18 @@ SCALING_SIZES = (2, 4, 8, 16, 32, 64)
 WORKSPACE = (np.array([0.25, -0.4, 0.1]), np.array([0.6, 0.3, 0.4]))
 
 
-def bench_trajectory(layout: dict, dt: float = 0.5) -> np.ndarray:
+def bench_trajectory(scene: Scene, dt: float = 0.5) -> np.ndarray:
     """States ``(n, 4)`` every ``dt`` s of the Unknown Goal reference, held at its end."""
-    reference = intended_trajectory("unknown_goal", layout, dt=dt)[:, 1:]
+    reference = intended_trajectory("unknown_goal", scene, dt=dt)[:, 1:]
     n_needed = int(round(15.0 / dt)) + 1
     if len(reference) < n_needed:
         reference = np.vstack([reference, np.repeat(reference[-1:], n_needed - len(reference), 0)])
     return reference
 
 
-def goal_intents(layout: dict, n: int, rng: np.random.Generator) -> list[GoalIntent]:
+def goal_intents(scene: Scene, n: int, rng: np.random.Generator) -> list[GoalIntent]:
     """``n`` goal intents: green, purple, red, then goals drawn uniformly in :data:`WORKSPACE`."""
-    goals = layout["goals"]
-    named = [GoalIntent(name, goals[name]) for name in ("green", "purple", "red")][:n]
+    named = [GoalIntent(name, scene.goals[name]) for name in REQUIRED_GOALS][:n]
     extra = rng.uniform(*WORKSPACE, size=(max(n - len(named), 0), 3))
     return named + [GoalIntent(f"goal{i}", goal) for i, goal in enumerate(extra)]
 
@@ -59,6 +67,7 @@ def time_assistance_step(
     make_intents: Callable[[], Sequence],
     trajectory: np.ndarray,
     rng: np.random.Generator,
+    *,
     late_step: int = 24,
     repeats: int = 30,
     warmup: int = 3,
@@ -113,16 +122,17 @@ def linear_fit_r2(sizes, times) -> tuple[float, float, float]:
 
 
 def assistance_benchmarks(
-    layout: dict,
+    scene: Scene,
     make_neural_intent: Callable[[], object] | None,
+    *,
     seed: int = 0,
     repeats: int = 200,
     neural_repeats: int = 20,
 ) -> dict:
     """``step_us_goal3``, ``step_us_neural1`` (None without a neural intent) and ``scaling``."""
     rng = np.random.default_rng(seed)
-    trajectory = bench_trajectory(layout)
-    goals3 = goal_intents(layout, 3, rng)
+    trajectory = bench_trajectory(scene)
+    goals3 = goal_intents(scene, 3, rng)
     results = {
         "step_us_goal3": time_assistance_step(lambda: goals3, trajectory, rng, repeats=repeats)
     }
@@ -134,7 +144,7 @@ def assistance_benchmarks(
         )
     scaling = []
     for n in SCALING_SIZES:
-        intents = goal_intents(layout, n, rng)
+        intents = goal_intents(scene, n, rng)
         step = time_assistance_step(
             lambda intents=intents: intents, trajectory, rng, repeats=repeats
         )
@@ -144,13 +154,13 @@ def assistance_benchmarks(
 
 
 def format_table(results: dict) -> str:
-    """The results as a plain-text table, with the issue's targets."""
+    """The results as a plain-text table, with the targets."""
     neural = results.get("step_us_neural1")
     sizes = [row["n_intents"] for row in results["scaling"]]
     times = [row["step_us"] for row in results["scaling"]]
     _, slope, r2 = linear_fit_r2(sizes, times)
     lines = [
-        "CPU time of one thread/process (see casa_core.robot.bench)",
+        "CPU time of one thread/process (see casa_core.bench)",
         f"{'measure':<44}{'value':>14}  target",
         f"{'assistance step, 3 goal intents (us)':<44}{results['step_us_goal3']:>14.1f}  <= 200",
         f"{'assistance step, + 1 neural intent (us)':<44}"
@@ -179,30 +189,97 @@ def format_table(results: dict) -> str:
     return "\n".join(lines)
 
 
-def untrained_neural_intent(layout: dict, seed: int = 0, planner=None):
-    """A neural intent as IRL makes them (:mod:`casa_core.irl`), untrained: same cost.
+def untrained_neural_intent(scene: Scene, *, seed: int = 0, planner=None):
+    """A neural intent as IRL makes them (:mod:`casa_core.learning`), untrained: same cost.
 
     ``planner`` (a :class:`casa_core.planning.PlannerConfig`) defaults to the one
     learned intents assist with (short warm starts), as loaded from a library.
     """
-    from casa_core.irl import (
-        IRLConfig,
-        NeuralIntent,
-        assist_planner,
-        cost_network,
-        feature_names,
-        scene_objects,
-    )
+    from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
+    from casa_core.study.learning_evidence import scene_objects
 
     config = IRLConfig()
-    names, positions = scene_objects(layout)
-    network = cost_network(len(feature_names(names)), config.hidden, config.negative_slope, seed)
+    objects = scene_objects(scene)
+    network = cost_network(
+        len(feature_names(objects)),
+        hidden=config.hidden,
+        negative_slope=config.negative_slope,
+        seed=seed,
+    )
     return NeuralIntent(
         "neural",
         network,
-        names,
-        positions,
+        objects=objects,
         cost_scale=config.cost_scale,
         length_scale=config.length_scale,
-        planner=assist_planner(config) if planner is None else planner,
+        planner=config.assist_planner() if planner is None else planner,
     )
+
+
+class _ExpertThenRest(WaypointKeys):
+    """:class:`WaypointKeys` that rests at the last waypoint instead of finishing."""
+
+    def keys(self, t: float, state) -> frozenset[str]:
+        held = super().keys(t, state)
+        self.done = False
+        return held
+
+
+def trial_realtime_factor(
+    scene: Scene, *, duration: float = 15.0, repeats: int = 3, reuse_simulation: bool = False
+) -> tuple[float, float]:
+    """Simulated seconds per second of a whole CASA trial, pybullet included.
+
+    The Unknown Goal task driven by :class:`WaypointKeys` for ``duration`` seconds
+    (the expert rests at the goal once there). By default each trial creates and
+    tears down its own simulation inside the timing (about 30 ms, mostly
+    ``pybullet.connect``); with ``reuse_simulation`` one simulation, created before
+    the timing, runs every trial, as a study runner that keeps it open would.
+
+    Returns
+    -------
+    (float, float)
+        Medians over ``repeats`` trials of simulated seconds per CPU second of this
+        process (what one core achieves, whatever else runs on the machine) and per
+        wall-clock second.
+    """
+    shared = ArmSimulation(scene) if reuse_simulation else None
+    per_cpu, per_wall = [], []
+    try:
+        for _ in range(repeats):
+            source = _ExpertThenRest(task_waypoints("unknown_goal", scene)[1:])
+            cpu, wall = time.process_time(), time.perf_counter()
+            run_trial(
+                scene,
+                "unknown_goal",
+                "CASA",
+                source,
+                participant="bench",
+                max_duration=duration,
+                sim=shared,
+            )
+            per_cpu.append(duration / (time.process_time() - cpu))
+            per_wall.append(duration / (time.perf_counter() - wall))
+    finally:
+        if shared is not None:
+            shared.close()
+    return float(np.median(per_cpu)), float(np.median(per_wall))
+
+
+def run_benchmarks(scene: Scene, *, seed: int = 0) -> dict:
+    """Every benchmark: :func:`assistance_benchmarks` and :func:`trial_realtime_factor`.
+
+    Returns the dict :func:`format_table` prints: ``step_us_goal3``,
+    ``step_us_neural1``, ``scaling``, ``trial_realtime_factor`` (per CPU second),
+    ``trial_realtime_factor_wall`` and ``trial_realtime_factor_reused_sim``.
+    """
+    results = assistance_benchmarks(
+        scene, lambda: untrained_neural_intent(scene, seed=seed), seed=seed
+    )
+    factor_cpu, factor_wall = trial_realtime_factor(scene)
+    results["trial_realtime_factor"] = factor_cpu
+    results["trial_realtime_factor_wall"] = factor_wall
+    results["trial_realtime_factor_reused_sim"] = trial_realtime_factor(
+        scene, reuse_simulation=True
+    )[0]
+    return results

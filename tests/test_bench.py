@@ -2,15 +2,14 @@
 
 import numpy as np
 import pytest
-import yaml
 
-from casa_core.robot import bench
+from casa_core import bench
+from casa_core.scene import load_scene
 
 
 @pytest.fixture(scope="module")
-def layout():
-    with open("config/scene.yaml", encoding="utf-8") as handle:
-        return yaml.safe_load(handle)
+def scene():
+    return load_scene()
 
 
 def test_linear_fit_recovers_an_exact_line_and_flags_a_curve():
@@ -20,30 +19,30 @@ def test_linear_fit_recovers_an_exact_line_and_flags_a_curve():
     assert bench.linear_fit_r2(sizes, [n**2 for n in sizes])[2] < 0.99
 
 
-def test_goal_intents_start_with_the_scene_goals_and_are_seeded(layout):
-    first = bench.goal_intents(layout, 8, np.random.default_rng(1))
-    again = bench.goal_intents(layout, 8, np.random.default_rng(1))
+def test_goal_intents_start_with_the_scene_goals_and_are_seeded(scene):
+    first = bench.goal_intents(scene, 8, np.random.default_rng(1))
+    again = bench.goal_intents(scene, 8, np.random.default_rng(1))
     assert [i.name for i in first][:3] == ["green", "purple", "red"]
     assert len(first) == 8
     np.testing.assert_array_equal(first[-1].goal, again[-1].goal)
-    assert [i.name for i in bench.goal_intents(layout, 2, np.random.default_rng(1))] == [
+    assert [i.name for i in bench.goal_intents(scene, 2, np.random.default_rng(1))] == [
         "green",
         "purple",
     ]
 
 
-def test_bench_trajectory_covers_the_horizon_every_half_second(layout):
-    states = bench.bench_trajectory(layout)
+def test_bench_trajectory_covers_the_horizon_every_half_second(scene):
+    states = bench.bench_trajectory(scene)
     assert states.shape == (31, 4)
-    np.testing.assert_allclose(states[0, :3], layout["start"]["position"])
-    np.testing.assert_allclose(states[-1, :3], layout["goals"]["red"])
+    np.testing.assert_allclose(states[0], scene.start_state)
+    np.testing.assert_allclose(states[-1, :3], scene.goals["red"])
 
 
-def test_time_assistance_step_and_table(layout):
+def test_time_assistance_step_and_table(scene):
     rng = np.random.default_rng(0)
-    intents = bench.goal_intents(layout, 3, rng)
+    intents = bench.goal_intents(scene, 3, rng)
     step = bench.time_assistance_step(
-        lambda: intents, bench.bench_trajectory(layout), rng, repeats=3
+        lambda: intents, bench.bench_trajectory(scene), rng, repeats=3
     )
     assert step > 0
     with pytest.raises(ValueError, match="needs > 40"):
@@ -56,3 +55,8 @@ def test_time_assistance_step_and_table(layout):
     }
     table = bench.format_table(results)
     assert "n/a" in table and "150.0" in table and "R^2" in table
+
+
+def test_trial_realtime_factor_runs_the_unknown_goal_trial(scene):
+    cpu, wall = bench.trial_realtime_factor(scene, duration=1.0, repeats=1)
+    assert cpu > 0 and wall > 0

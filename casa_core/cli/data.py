@@ -1,0 +1,124 @@
+"""``casa validate``, ``casa process`` and ``casa stats``: raw logs to tables and statistics."""
+
+from __future__ import annotations
+
+import sys
+
+
+def register(commands) -> None:
+    """Add this module's commands to the ``casa`` subcommands."""
+    _add_validate(commands)
+    _add_process(commands)
+    _add_stats(commands)
+
+
+def _add_validate(commands) -> None:
+    command = commands.add_parser(
+        "validate",
+        help="check trial logs and surveys against the casa-trial/1 contract",
+        description="Check files and folders (recursively) against casa-trial/1; print every "
+        "problem with file, row or key, and rule; exit 1 if any (0 with --allow-invalid).",
+    )
+    command.add_argument("paths", nargs="+", metavar="PATH", help="a log file or a folder")
+    command.add_argument("--report", metavar="CSV", help="also write validation.csv here")
+    command.add_argument(
+        "--allow-invalid",
+        action="store_true",
+        help="report bad files as excluded and exit 0 (the DAG then leaves them out)",
+    )
+    command.set_defaults(func=_validate)
+
+
+def _validate(args) -> int:
+    from casa_core import datasets
+    from casa_core.io import check_paths
+
+    if args.report:
+        checks = datasets.write_validation(
+            args.paths, args.report, allow_invalid=args.allow_invalid
+        )
+    else:
+        checks = check_paths(args.paths)
+    problems = [problem for check in checks for problem in check.problems]
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    verdict = "excluded" if args.allow_invalid else "invalid"
+    bad_files = sum(not check.ok for check in checks)
+    print(
+        f"casa validate: {len(checks)} file(s) checked, {bad_files} {verdict}, "
+        f"{len(problems)} problem(s)",
+        file=sys.stderr,
+    )
+    return 1 if problems and not args.allow_invalid else 0
+
+
+def _add_process(commands) -> None:
+    command = commands.add_parser(
+        "process",
+        help="turn one raw dataset folder into trials.csv, steps.csv and likert.csv",
+    )
+    command.add_argument("raw", metavar="RAW_DIR", help="the dataset folder, e.g. data/raw/mine")
+    command.add_argument("--out", required=True, metavar="DIR", help="folder of the tables")
+    command.add_argument("--scene", required=True, metavar="YAML", help="config/scene.yaml")
+    command.add_argument("--dataset", help="dataset name in the tables (default: folder name)")
+    command.add_argument(
+        "--allow-invalid", action="store_true", help="exclude bad files instead of failing"
+    )
+    command.set_defaults(func=_process)
+
+
+def _process(args) -> int:
+    from casa_core import datasets
+    from casa_core.scene import SceneError, load_scene
+
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as error:
+        print(f"casa process: {error}", file=sys.stderr)
+        return 1
+    try:
+        tables = datasets.process_dataset(
+            args.raw, args.out, scene, dataset=args.dataset, allow_invalid=args.allow_invalid
+        )
+    except datasets.DatasetInvalid as error:
+        print(f"casa process: {error}", file=sys.stderr)
+        return 1
+    print(
+        f"casa process: {len(tables.trials)} trial(s), {len(tables.steps)} step row(s), "
+        f"{len(tables.likert)} Likert answer(s) -> {args.out}"
+    )
+    return 0
+
+
+def _add_stats(commands) -> None:
+    command = commands.add_parser(
+        "stats",
+        help="the study's statistics (H1-H4): stats.csv and an APA-style Markdown report",
+    )
+    command.add_argument("--trials", required=True, metavar="CSV", help="trials.csv")
+    command.add_argument("--likert", metavar="CSV", help="likert.csv (optional)")
+    command.add_argument("--out-csv", required=True, metavar="CSV", help="stats.csv to write")
+    command.add_argument("--out-md", required=True, metavar="MD", help="report to write")
+    command.set_defaults(func=_stats)
+
+
+def _stats(args) -> int:
+    from casa_core import datasets, stats
+    from casa_core.io.atomic import atomic_write_text, write_csv
+
+    try:
+        # read_table keeps the method "NA" as text (pandas' default would make it missing).
+        trials = datasets.read_table(args.trials)
+        likert = datasets.read_table(args.likert) if args.likert else None
+        table = stats.analyze_study(trials, likert)
+    except (OSError, ValueError) as error:
+        print(f"casa stats: {error}", file=sys.stderr)
+        return 1
+    write_csv(args.out_csv, table)
+    atomic_write_text(args.out_md, stats.report_markdown(table))
+    # A test that ran has a p-value or an estimate; a skipped one has neither.
+    skipped = int((table["p"].isna() & table["estimate"].isna()).sum())
+    print(f"casa stats: {len(table)} row(s) -> {args.out_csv}, {args.out_md}")
+    if skipped:
+        print(f"casa stats: {skipped} test(s) skipped, see their note", file=sys.stderr)
+    return 0

@@ -1,0 +1,100 @@
+"""``casa learn`` and ``casa library``: intents learned from demonstrations, and their files."""
+
+from __future__ import annotations
+
+import sys
+
+from casa_core import vocabulary
+from casa_core.cli._options import scene_option
+
+
+def register(commands) -> None:
+    """Add this module's commands to the ``casa`` subcommands."""
+    _add_learn(commands)
+    _add_library(commands)
+
+
+def _add_learn(commands) -> None:
+    command = commands.add_parser(
+        "learn",
+        help="learn a new intent from demonstration logs (deep MaxEnt IRL) into a library",
+        description="Read the demonstration logs (casa-trial/1) below --demos, learn intent "
+        "NAME by deep maximum-entropy IRL and write NAME.intent.json into the library folder.",
+    )
+    command.add_argument("--demos", required=True, metavar="DIR", help="folder of demo logs")
+    command.add_argument("--name", required=True, help="name of the new intent")
+    command.add_argument("--library", required=True, metavar="DIR", help="the intent library")
+    scene_option(command)
+    command.add_argument("--seed", type=int, default=0, help="seed of the network (default 0)")
+    command.add_argument(
+        "--task", choices=vocabulary.TASKS, help="only the logs of this task (default: all)"
+    )
+    command.add_argument(
+        "--phase",
+        default="demonstration",
+        choices=(*vocabulary.PHASES, "any"),
+        help="only the logs of this phase (default: demonstration; 'any' for all)",
+    )
+    command.add_argument("--participant", help="stored participant (default: from the logs)")
+    command.add_argument(
+        "--max-iterations", type=int, metavar="N", help="most IRL iterations (default 50)"
+    )
+    command.set_defaults(func=_learn)
+
+
+def _learn(args) -> int:
+    from casa_core.io import LogError
+    from casa_core.learning import IRLConfig
+    from casa_core.learning.from_logs import learn_to_library
+    from casa_core.scene import load_scene
+    from casa_core.study.learning_evidence import scene_objects
+
+    config = IRLConfig()
+    if args.max_iterations is not None:
+        config = IRLConfig(max_iterations=args.max_iterations)
+    try:
+        path, history, seconds = learn_to_library(
+            args.demos,
+            args.name,
+            library=args.library,
+            objects=scene_objects(load_scene(args.scene)),
+            seed=args.seed,
+            task=args.task,
+            participant=args.participant,
+            config=config,
+            phase=None if args.phase == "any" else args.phase,
+        )
+    except (OSError, ValueError, LogError) as error:
+        print(f"casa learn: {error}", file=sys.stderr)
+        return 1
+    last = history[-1]
+    print(
+        f"casa learn: {args.name}: {len(history)} iterations in {seconds:.1f} s, "
+        f"converged={'yes' if last.get('converged') else 'no'}, "
+        f"D^phi ends {last['end_distance_m'] * 100:.1f} cm from the demos' -> {path}"
+    )
+    return 0
+
+
+def _add_library(commands) -> None:
+    command = commands.add_parser("library", help="inspect an intent library")
+    actions = command.add_subparsers(dest="action", metavar="ACTION", required=True)
+    listing = actions.add_parser(
+        "list",
+        help="one line per learned intent; damaged files are reported, not fatal",
+        description="Print one line per intent file; report each unusable file on stderr "
+        "with the rule it breaks; exit 1 if any file is unusable.",
+    )
+    listing.add_argument("library", metavar="DIR")
+    listing.set_defaults(func=_library_list)
+
+
+def _library_list(args) -> int:
+    from casa_core import library
+
+    entries, problems = library.scan_library(args.library)
+    for entry in entries:
+        print(entry.summary())
+    for problem in problems:
+        print(f"casa library: {problem}", file=sys.stderr)
+    return 1 if problems else 0

@@ -1,0 +1,129 @@
+"""``casa teleop`` and ``casa bench``: the simulated arm, driven by a person or timed."""
+
+from __future__ import annotations
+
+import sys
+
+from casa_core import vocabulary
+from casa_core.cli._options import scene_option
+
+
+def register(commands) -> None:
+    """Add this module's commands to the ``casa`` subcommands."""
+    _add_teleop(commands)
+    _add_bench(commands)
+
+
+def _add_teleop(commands) -> None:
+    command = commands.add_parser(
+        "teleop",
+        help="drive the simulated JACO arm from the keyboard in a window; write the trial log",
+        description="Open a pybullet window with the task scene; after a countdown, drive the "
+        "cup with the arrows (x, y), W/S (z) and A/D (pour); Enter ends the trial. The log "
+        "goes to OUT/<task>_<phase>_<method>.{json,csv} (casa-trial/1).",
+    )
+    # The model's defaults, written once in the assistant.
+    from casa_core.assistant import EPSILON, EVIDENCE
+
+    command.add_argument("--task", required=True, choices=vocabulary.TASKS)
+    command.add_argument("--method", required=True, choices=vocabulary.METHODS)
+    command.add_argument("--participant", required=True, metavar="ID")
+    command.add_argument("--out", required=True, metavar="DIR", help="folder of the log")
+    command.add_argument(
+        "--phase", choices=vocabulary.PHASES, help="log phase (default: the task's first)"
+    )
+    scene_option(command)
+    command.add_argument("--max-duration", type=float, default=60.0, metavar="SECONDS")
+    command.add_argument(
+        "--intent",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="a learned intent (casa-intent/1 file) the robot also knows; repeatable "
+        "(for the after_learning phase)",
+    )
+    command.add_argument(
+        "--demonstrations",
+        type=int,
+        default=5,
+        metavar="N",
+        help="after a CASA trial before learning that finds every known intent's confidence "
+        "below --epsilon, ask for and record N demonstrations (default 5; 0: never)",
+    )
+    command.add_argument(
+        "--epsilon",
+        type=float,
+        default=EPSILON,
+        help="misspecification threshold (default %(default)s)",
+    )
+    command.add_argument(
+        "--evidence",
+        choices=EVIDENCE,
+        help="what inference observes: the user's commanded motion (the default) or the "
+        "arm's executed motion, the robot's share included (the original implementation's)",
+    )
+    command.set_defaults(func=_teleop)
+
+
+def _teleop(args) -> int:
+    from casa_core.scene import load_scene
+    from casa_core.study.closed_loop import trial_intents
+    from casa_core.study.teleop_session import teleop_session
+
+    scene = load_scene(args.scene)  # a SceneError is reported by casa_core.cli.main
+    try:
+        stems, detected = teleop_session(
+            scene,
+            args.task,
+            args.method,
+            args.participant,
+            args.out,
+            n_demonstrations=args.demonstrations,
+            epsilon=args.epsilon,
+            phase=args.phase,
+            max_duration=args.max_duration,
+            intents=trial_intents(scene, args.intent),
+            assistant_options={"evidence": args.evidence} if args.evidence else None,
+        )
+    except (FileExistsError, RuntimeError, ValueError) as error:
+        print(f"casa teleop: {error}", file=sys.stderr)
+        return 2
+    for stem in stems:
+        print(f"casa teleop: wrote {stem}.json and {stem}.csv")
+    if detected:
+        print(
+            f"casa teleop: misspecification detected; {len(stems) - 1} demonstrations "
+            f"recorded. Learn the new intent with: casa learn --demos {args.out} "
+            f"--task {args.task} --name NAME --library DIR"
+        )
+    return 0
+
+
+def _add_bench(commands) -> None:
+    command = commands.add_parser(
+        "bench",
+        help="time the assistance step and a whole simulated trial",
+        description="Print a table; with --json, also one JSON object on the last line with "
+        "step_us_goal3, step_us_neural1, scaling and trial_realtime_factor (one CPU thread).",
+    )
+    command.add_argument("--json", action="store_true", help="print the JSON line last")
+    scene_option(command)
+    command.add_argument("--seed", type=int, default=0)
+    command.set_defaults(func=_bench)
+
+
+def _bench(args) -> int:
+    import json
+
+    import torch
+
+    from casa_core import bench
+    from casa_core.scene import load_scene
+
+    scene = load_scene(args.scene)  # a SceneError is reported by casa_core.cli.main
+    torch.set_num_threads(1)  # the targets are for one core
+    results = bench.run_benchmarks(scene, seed=args.seed)
+    print(bench.format_table(results))
+    if args.json:
+        print(json.dumps(results))
+    return 0

@@ -1,0 +1,140 @@
+"""``casa simulate`` and ``casa case-study``: the simulated study, one workflow job per call."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from casa_core import vocabulary
+
+if TYPE_CHECKING:
+    from casa_core.scene import Scene
+
+#: The config the workflow commands read when no --config is given (working directory).
+WORKFLOW_CONFIG = "config/config.yaml"
+
+
+def register(commands) -> None:
+    """Add this module's commands to the ``casa`` subcommands."""
+    _add_simulate(commands)
+    _add_case_study(commands)
+
+
+def _load_config(args) -> tuple[dict, Scene]:
+    """The validated workflow config (``--config``, repeatable) and the scene it names.
+
+    Read once, here, at the edge; a ConfigError or SceneError names the file and the key.
+    """
+    from casa_core.config import load_config
+    from casa_core.scene import load_scene
+
+    config = load_config(*(args.config or [WORKFLOW_CONFIG]))
+    return config, load_scene(config["scene"])
+
+
+def _add_config_option(command) -> None:
+    command.add_argument(
+        "--config",
+        action="append",
+        metavar="YAML",
+        help=f"workflow config (default {WORKFLOW_CONFIG}); repeat to overlay files in order, "
+        "e.g. --config config/config.yaml --config config/ci.yaml",
+    )
+
+
+def _add_simulate(commands) -> None:
+    command = commands.add_parser(
+        "simulate", help="simulate one participant of the study (one stage per call)"
+    )
+    command.add_argument(
+        "stage",
+        choices=["before", "learn", "after", "learning-table"],
+        help="before: phases 1-3 and demonstrations; learn: one unknown "
+        "task's intent; after: CASA after learning and the surveys; "
+        "learning-table: gather the learn rows into one CSV",
+    )
+    _add_config_option(command)
+    command.add_argument(
+        "--participant", type=int, default=1, metavar="INDEX", help="1-based participant number"
+    )
+    command.add_argument("--rows", nargs="*", default=[], help="learning-table: learn CSVs")
+    command.add_argument("--out", required=True, help="folder (before/after) or CSV (learn)")
+    command.add_argument("--before", help="the participant's before-learning folder")
+    command.add_argument("--task", choices=vocabulary.UNKNOWN_TASKS, help="learn: task")
+    command.add_argument("--library", help="learn/after: the participant's intent library")
+    command.set_defaults(func=_simulate)
+
+
+def _simulate(args) -> int:
+    from pathlib import Path
+
+    import pandas as pd
+
+    from casa_core.io.atomic import write_csv
+    from casa_core.study import simulate
+
+    if args.stage == "learning-table":
+        from casa_core.datasets import read_table
+
+        rows = [read_table(path) for path in sorted(args.rows)]
+        table = pd.concat(rows, ignore_index=True).sort_values(["participant", "task"])
+        write_csv(args.out, table)
+        print(f"casa simulate learning-table: {len(table)} learned intent(s) -> {args.out}")
+        return 0
+    config, scene = _load_config(args)
+    simulation = config["simulation"]
+    index = args.participant - 1
+    pid = simulate.participant_id(index)
+    if args.stage == "before":
+        written = simulate.simulate_before_learning(
+            index, scene, simulation=simulation, out_dir=Path(args.out)
+        )
+    elif args.stage == "learn":
+        row = simulate.learn_from_demonstrations(
+            Path(args.before),
+            args.task,
+            scene=scene,
+            seed=int(simulation["seed"]) + index,
+            library=Path(args.library),
+            pid=pid,
+        )
+        write_csv(args.out, pd.DataFrame([row]))
+        written = [args.out]
+    else:
+        learned = sorted(Path(args.library).rglob("*.intent.json"))
+        written = simulate.simulate_after_learning(
+            index,
+            scene,
+            simulation=simulation,
+            learned=learned,
+            before_dir=Path(args.before),
+            out_dir=Path(args.out),
+        )
+    print(f"casa simulate {args.stage}: participant {pid}, {len(written)} file(s)")
+    return 0
+
+
+def _add_case_study(commands) -> None:
+    command = commands.add_parser(
+        "case-study", help="the expert case study and the arbitration comparison"
+    )
+    _add_config_option(command)
+    command.add_argument("--work", required=True, help="folder for the expert's logs and intents")
+    command.add_argument("--steps", required=True, help="steps.csv to write")
+    command.add_argument("--arbitration", required=True, help="arbitration.csv to write")
+    command.set_defaults(func=_case_study)
+
+
+def _case_study(args) -> int:
+    from pathlib import Path
+
+    from casa_core.io.atomic import write_csv
+    from casa_core.study import simulate
+
+    config, scene = _load_config(args)
+    steps, arbitration = simulate.run_case_study(
+        scene, config["case_study"], work_dir=Path(args.work)
+    )
+    write_csv(args.steps, steps)
+    write_csv(args.arbitration, arbitration)
+    print(f"casa case-study: {len(steps)} step row(s), {len(arbitration)} arbitration row(s)")
+    return 0

@@ -1,0 +1,271 @@
+"""The workflow config: one loader, one schema, defaults written once.
+
+:func:`load_config` reads one or more YAML files, merges each over the ones before it
+(nested mappings key by key, as Snakemake merges ``--configfile`` over the Snakefile's
+``configfile:``), applies command-line overrides, validates the result against
+:data:`SCHEMA_PATH` (``casa_core/config.schema.yaml``: every key, its type, range and
+default) and fills in the schema's defaults. The config is read once, at the edge (the
+workflow's ``common.smk`` and the ``casa`` commands); code below takes plain values.
+
+Every error names the file, the dotted key and the rule it breaks, e.g.
+``config/ci.yaml: simulation.max_duraton: unknown key``.
+
+Examples
+--------
+>>> import tempfile
+>>> folder = Path(tempfile.mkdtemp())
+>>> _ = (folder / "overlay.yaml").write_text("simulation: {participants: 3}\\n")
+>>> config = load_config(DEFAULT_CONFIG, folder / "overlay.yaml")
+>>> config["simulation"]["participants"], config["simulation"]["seed"]
+(3, 2021)
+>>> _ = (folder / "typo.yaml").write_text("simulation: {max_duraton: 20}\\n")
+>>> load_config(DEFAULT_CONFIG, folder / "typo.yaml")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+casa_core.config.ConfigError: .../typo.yaml: simulation.max_duraton: unknown key; did you ...
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import json
+import math
+import re
+from collections.abc import Iterator, Mapping
+from functools import cache
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import yaml
+
+if TYPE_CHECKING:
+    import jsonschema
+
+#: The schema of the workflow config: every key the package reads, its type, range and default.
+SCHEMA_PATH = Path(__file__).with_name("config.schema.yaml")
+#: The study's config, ``config/config.yaml`` of the repository.
+DEFAULT_CONFIG = Path(__file__).resolve().parents[1] / "config" / "config.yaml"
+#: Where ``--config KEY=VALUE`` overrides are said to come from in errors.
+OVERRIDES = "--config"
+
+
+class ConfigError(ValueError):
+    """A config that cannot be used; the message names the file, the dotted key and the rule."""
+
+
+@cache
+def schema() -> dict:
+    """The parsed :data:`SCHEMA_PATH` (read once; do not modify it)."""
+    return yaml.safe_load(SCHEMA_PATH.read_text(encoding="utf-8"))
+
+
+def default(key: str) -> Any:
+    """The schema's default of the dotted ``key``.
+
+    Examples
+    --------
+    >>> default("simulation.epsilon"), default("allow_invalid")
+    (1.0, False)
+    """
+    node = schema()
+    for name in key.split("."):
+        node = node["properties"][name]
+    return copy.deepcopy(node["default"])
+
+
+def load_config(*paths: Path | str, overrides: Mapping | None = None) -> dict:
+    """Read, merge and validate config files; the effective config with defaults filled in.
+
+    Parameters
+    ----------
+    *paths : path-like
+        YAML files, each a mapping; a later file overrides an earlier one key by key
+        (nested mappings are merged, other values replaced). Relative paths resolve
+        against the working directory.
+    overrides : mapping, optional
+        Applied last, like ``snakemake --config``; strings given for a boolean, integer
+        or number key are converted (``"true"``, ``"3"``, ``"0.5"``).
+
+    Returns
+    -------
+    dict
+        The validated config, every default of the schema filled in.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file (or ``--config``), the dotted key and the rule: an unreadable
+        file, an unknown key, a value of the wrong type or out of range, a missing
+        required key.
+    """
+    if not paths and not overrides:
+        raise ConfigError("no config given")
+    merged: dict = {}
+    sources = []
+    layers = [(str(path), _read(Path(path))) for path in paths]
+    if overrides:
+        layers.append((OVERRIDES, _coerce(_plain(overrides), schema())))
+    for source, layer in layers:
+        _raise(source, _problems(layer, partial=True))
+        merge(merged, layer)
+        sources.append(source)
+    return validate_config(merged, source=" + ".join(sources))
+
+
+def validate_config(data: Any, source: str = "config") -> dict:
+    """Validate a whole config; a copy with the schema's defaults filled in.
+
+    ``source`` names the config in errors. Raises :class:`ConfigError`.
+
+    Examples
+    --------
+    >>> validate_config({"scene": "s.yaml"}, source="mine.yaml")
+    Traceback (most recent call last):
+    ...
+    casa_core.config.ConfigError: mine.yaml: simulation: missing (required)
+    mine.yaml: case_study: missing (required)
+    """
+    config = _plain(data)
+    _raise(source, _problems(config, partial=False))
+    _raise(source, _consistency(config))
+    return config
+
+
+def merge(base: dict, overlay: Mapping) -> dict:
+    """Merge ``overlay`` into ``base`` in place: nested mappings key by key; returns ``base``.
+
+    The same rule as Snakemake's for ``--configfile`` and ``--config``.
+
+    Examples
+    --------
+    >>> merge({"a": {"b": 1, "c": 2}, "d": 3}, {"a": {"c": 5}, "d": {"e": 6}})
+    {'a': {'b': 1, 'c': 5}, 'd': {'e': 6}}
+    """
+    for key, value in overlay.items():
+        if isinstance(value, Mapping) and isinstance(base.get(key), dict):
+            merge(base[key], value)
+        else:
+            base[key] = copy.deepcopy(dict(value) if isinstance(value, Mapping) else value)
+    return base
+
+
+def config_text(config: Mapping) -> str:
+    """The config as YAML text, keys sorted: the same config always gives the same bytes."""
+    return yaml.safe_dump(_plain(config), sort_keys=True)
+
+
+def _read(path: Path) -> dict:
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as error:
+        raise ConfigError(f"cannot read the config {path}: {error}") from None
+    except yaml.YAMLError as error:
+        raise ConfigError(f"{path}: not valid YAML: {error}") from None
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: must be a mapping of keys, got {type(data).__name__}")
+    return data
+
+
+def _plain(data: Any) -> Any:
+    """Plain dicts, lists, strings and numbers (Snakemake hands over its own mapping types)."""
+    return json.loads(json.dumps(data, default=dict))
+
+
+def _coerce(value: Any, node: dict) -> Any:
+    """Command-line strings converted to the type the schema wants there, where they parse."""
+    if isinstance(value, dict):
+        properties = node.get("properties", {})
+        return {k: _coerce(v, properties[k]) if k in properties else v for k, v in value.items()}
+    if not isinstance(value, str):
+        return value
+    kind = node.get("type")
+    if kind == "boolean" and value.lower() in ("true", "false"):
+        return value.lower() == "true"
+    if kind in ("integer", "number") and re.fullmatch(r"[+-]?\d+", value):
+        return int(value)  # as YAML reads 3: an int, which the schema's numbers admit
+    if kind == "number":
+        try:
+            number = float(value)
+        except ValueError:
+            return value
+        return number if math.isfinite(number) else value
+    return value
+
+
+@cache
+def _validator(partial: bool) -> jsonschema.protocols.Validator:
+    """A validator that fills in defaults; ``partial`` (an overlay) skips ``required``."""
+    import jsonschema  # imported here: every ``casa`` command imports this module
+
+    base = jsonschema.Draft202012Validator
+    check_properties = base.VALIDATORS["properties"]
+
+    def properties(validator, props, instance, node):
+        if not partial and validator.is_type(instance, "object"):
+            for name, sub in props.items():
+                if "default" in sub and name not in instance:
+                    instance[name] = copy.deepcopy(sub["default"])
+        yield from check_properties(validator, props, instance, node)
+
+    rules = {"properties": properties}
+    if partial:
+        rules["required"] = lambda *args: iter(())
+    return jsonschema.validators.extend(base, rules)(schema())
+
+
+def _problems(config: Any, *, partial: bool) -> list[str]:
+    """``key: rule`` for every problem of ``config``, in the order of the keys."""
+    errors = sorted(_validator(partial).iter_errors(config), key=lambda e: list(map(str, e.path)))
+    # dict.fromkeys: one missing key is reported once, not once per missing sibling.
+    return list(dict.fromkeys(problem for error in errors for problem in _describe(error)))
+
+
+def _describe(error: jsonschema.ValidationError) -> Iterator[str]:
+    key = ".".join(str(part) for part in error.absolute_path)
+    prefix = f"{key}." if key else ""
+    rule, node, value = error.validator, error.schema, error.instance
+    if rule == "additionalProperties":
+        allowed = list(node.get("properties", {}))
+        for name in (name for name in value if name not in allowed):
+            close = difflib.get_close_matches(name, allowed, n=1)
+            hint = f"; did you mean {close[0]}?" if close else ""
+            yield f"{prefix}{name}: unknown key{hint} (allowed: {', '.join(allowed)})"
+    elif rule == "required":
+        for name in (name for name in error.validator_value if name not in value):
+            yield f"{prefix}{name}: missing (required)"
+    elif rule == "type":
+        kind = {"object": "a mapping", "array": "a list", "integer": "an integer"}.get(
+            error.validator_value, f"a {error.validator_value}"
+        )
+        yield f"{key}: must be {kind}, got {value!r}"
+    elif rule == "enum":
+        choices = ", ".join(map(str, error.validator_value))
+        yield f"{key}: must be one of {choices}, got {value!r}"
+    elif rule in _BOUNDS:
+        yield f"{key}: must be {_BOUNDS[rule]} {error.validator_value}, got {value!r}"
+    elif rule in ("minItems", "minLength"):
+        yield f"{key}: must not be empty"
+    else:
+        yield f"{key}: {error.message}"
+
+
+_BOUNDS = {"minimum": ">=", "maximum": "<=", "exclusiveMinimum": ">", "exclusiveMaximum": "<"}
+
+
+def _consistency(config: dict) -> list[str]:
+    """Rules across keys that the schema cannot state."""
+    keys = config["simulation"]["population"]["max_keys"]
+    where = "simulation.population.max_keys.p"
+    if len(keys["p"]) != len(keys["values"]):
+        return [f"{where}: must have as many entries as values ({len(keys['values'])})"]
+    if abs(sum(keys["p"]) - 1) > 1e-8:
+        return [f"{where}: must sum to 1, got {sum(keys['p'])!r}"]
+    return []
+
+
+def _raise(source: str, problems: list[str]) -> None:
+    if problems:
+        raise ConfigError("\n".join(f"{source}: {problem}" for problem in problems))

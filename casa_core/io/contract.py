@@ -1,0 +1,105 @@
+"""The casa-trial/1 contract as data: names of keys, columns and files, and allowed values.
+
+A dataset is a folder. A trial is a pair of files with the same stem anywhere below
+it: ``<stem>.json`` (metadata) and ``<stem>.csv`` (one row per control tick). Likert
+answers live in files named :data:`SURVEYS_NAME`. The contract is written out in
+``docs/data-contracts.md``; :mod:`casa_core.io.validation` enforces it. The study's
+names (tasks, methods, phases, sources, keys, questions) come from
+:mod:`casa_core.vocabulary`.
+
+Examples
+--------
+>>> SCHEMA
+'casa-trial/1'
+>>> dict(META_ENUMS)["method"]
+('NA', 'PBA', 'CASA')
+>>> JOINTS[0], JOINTS[-1]
+('q1', 'q7')
+"""
+
+from __future__ import annotations
+
+import math
+
+from casa_core.vocabulary import (
+    KEYS,
+    METHODS,
+    PHASE_METHOD,
+    PHASES,
+    QUESTIONS,
+    SINGLE_TRIAL_PHASES,
+    SOURCES,
+    TASK_PHASES,
+    TASKS,
+)
+
+__all__ = [
+    "COLUMN_RANGES",
+    "CONDITION_KEYS",
+    "FRAME_OPTIONAL",
+    "FRAME_REQUIRED",
+    "INTENT_PREFIXES",
+    "JOINTS",
+    "KEYS",
+    "LIKERT_SCORES",
+    "META_ENUMS",
+    "META_OPTIONAL",
+    "META_REQUIRED",
+    "METHODS",
+    "PHASES",
+    "PHASE_METHOD",
+    "QUESTIONS",
+    "SCHEMA",
+    "SINGLE_TRIAL_PHASES",
+    "SOURCES",
+    "SURVEYS_NAME",
+    "SURVEY_ANSWER_KEY",
+    "SURVEY_COLUMNS",
+    "SURVEY_ENUMS",
+    "SURVEY_OPTIONAL",
+    "TASKS",
+    "TASK_PHASES",
+    "TIME_RANGE",
+]
+
+#: The value of the metadata's ``schema`` key.
+SCHEMA = "casa-trial/1"
+#: The name of every file of Likert answers.
+SURVEYS_NAME = "surveys.csv"
+
+#: Metadata keys every trial has, and the ones it may have.
+META_REQUIRED = ("schema", "participant", "task", "method", "phase", "source")
+META_OPTIONAL = ("intents", "seed", "started_at", "notes")
+#: The keys that name a participant's condition (a trial, or a survey answer's subject).
+CONDITION_KEYS = ("participant", "task", "method", "phase")
+#: Metadata keys whose value is one of a fixed set, in the order they are checked.
+META_ENUMS = (("task", TASKS), ("method", METHODS), ("phase", PHASES), ("source", SOURCES))
+
+#: Columns every trial has: time (s), end-effector position (m), rotation (rad), keys held.
+FRAME_REQUIRED = ("t", "x", "y", "z", "rot", "keys")
+#: The arbitration weight, logged by assisted trials.
+FRAME_OPTIONAL = ("alpha",)
+#: The arm's joint angles (rad).
+JOINTS = tuple(f"q{i}" for i in range(1, 8))
+#: Per-intent columns ``PREFIX:NAME``: the rationality ``beta`` and the ``belief``.
+INTENT_PREFIXES = ("beta", "belief")
+#: Bounds of a column (or of every column with that prefix): (low, high), both included.
+COLUMN_RANGES = {"alpha": (0.0, 1.0), "belief": (0.0, 1.0), "beta": (0.0, math.inf)}
+#: Bounds of ``t`` (s): a trial starts at or after 0.
+TIME_RANGE = (0.0, math.inf)
+
+#: Columns of a surveys file; ``source`` is optional.
+SURVEY_COLUMNS = ("participant", "task", "method", "phase", "question", "score")
+SURVEY_OPTIONAL = ("source",)
+#: Survey columns whose value is one of a fixed set, in the order they are checked.
+SURVEY_ENUMS = (
+    ("task", TASKS),
+    ("method", METHODS),
+    ("phase", PHASES),
+    ("question", QUESTIONS),
+    ("source", SOURCES),
+)
+#: The 7-point Likert scale.
+LIKERT_SCORES = tuple(range(1, 8))
+#: A participant answers each question once per task, method and phase.
+SURVEY_ANSWER_KEY = (*CONDITION_KEYS, "question")

@@ -1,0 +1,360 @@
+"""The rules of casa-trial/1: every way a trial's metadata, its CSV or a surveys file can break it.
+
+Checks never stop at the first problem: each reports every :class:`Problem` it finds
+(file, where, rule, message) so that a user can fix a file in one pass. The rules work
+on text and parsed values only; :mod:`casa_core.io.trial_log` reads and writes the files.
+The contract itself is ``docs/data-contracts.md`` (data in :mod:`casa_core.io.contract`).
+
+Examples
+--------
+>>> meta = {"schema": "casa-trial/1", "participant": "p01", "task": "known_goal",
+...         "method": "CASA", "phase": "no_misspecification", "source": "robot"}
+>>> [str(p) for p in check_meta(meta, "t.json")]
+["t.json: key 'source': [enum] is 'robot', expected one of human, simulated"]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pandas as pd
+
+from casa_core.io._cells import check_columns, in_range, numeric, read_csv_cells, where_lines
+from casa_core.io.contract import (
+    COLUMN_RANGES,
+    FRAME_OPTIONAL,
+    FRAME_REQUIRED,
+    INTENT_PREFIXES,
+    JOINTS,
+    KEYS,
+    LIKERT_SCORES,
+    META_ENUMS,
+    META_OPTIONAL,
+    META_REQUIRED,
+    METHODS,
+    PHASE_METHOD,
+    PHASES,
+    SCHEMA,
+    SURVEY_ANSWER_KEY,
+    SURVEY_COLUMNS,
+    SURVEY_ENUMS,
+    SURVEY_OPTIONAL,
+    TASK_PHASES,
+    TASKS,
+    TIME_RANGE,
+)
+from casa_core.io.problems import LogError, Problem
+
+__all__ = ["LogError", "Problem", "check_meta", "parse_surveys_csv", "parse_trial_csv"]
+
+# --------------------------------------------------------------------------- metadata
+
+#: A metadata rule's check: (value of its key, whole metadata) -> what is wrong, or None.
+MetaCheck = Callable[[object, dict], str | None]
+
+
+def _schema(value, meta: dict) -> str | None:
+    return None if value == SCHEMA else f"is {value!r}, expected {SCHEMA!r}"
+
+
+def _non_empty_string(value, meta: dict) -> str | None:
+    if isinstance(value, str) and value.strip():
+        return None
+    return f"is {value!r}, expected a non-empty string"
+
+
+def _one_of(allowed: tuple[str, ...]) -> MetaCheck:
+    def check(value, meta: dict) -> str | None:
+        return None if value in allowed else f"is {value!r}, expected one of {', '.join(allowed)}"
+
+    return check
+
+
+def _task_phase(phase, meta: dict) -> str | None:
+    task = meta.get("task")
+    if task in TASKS and phase in PHASES and phase not in TASK_PHASES[task]:
+        expected = " or ".join(TASK_PHASES[task])
+        return f"{phase!r} is not a phase of task {task!r} ({expected})"
+    return None
+
+
+def _phase_method(method, meta: dict) -> str | None:
+    phase = meta.get("phase")
+    expected = PHASE_METHOD.get(phase) if isinstance(phase, str) else None
+    if expected is not None and method in METHODS and method != expected:
+        return f"phase {phase!r} is run with {expected!r}"
+    return None
+
+
+def _intent_names(intents, meta: dict) -> str | None:
+    if not (isinstance(intents, list) and all(isinstance(n, str) and n.strip() for n in intents)):
+        return "expected a list of non-empty strings"
+    if len(set(intents)) != len(intents):
+        return "an intent name is listed twice"
+    return None
+
+
+#: The metadata rules after the required and unknown keys, in the order they are
+#: reported: (key, rule, check). A check runs when its key is present.
+META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
+    ("schema", "schema", _schema),
+    ("participant", "non-empty-string", _non_empty_string),
+    *((key, "enum", _one_of(allowed)) for key, allowed in META_ENUMS),
+    ("phase", "task-phase", _task_phase),
+    ("method", "phase-method", _phase_method),
+    ("intents", "intent-names", _intent_names),
+)
+
+
+def check_meta(meta, file: str) -> list[Problem]:
+    """Every way in which a trial's metadata breaks casa-trial/1.
+
+    Parameters
+    ----------
+    meta : object
+        The parsed ``.json``; anything but a dict is one ``json-object`` problem.
+    file : str
+        The file's name, used in problems.
+
+    Returns
+    -------
+    list of Problem
+        Missing keys, unknown keys, then :data:`META_RULES` in order; empty when valid.
+
+    Examples
+    --------
+    >>> meta = {"schema": "casa-trial/1", "participant": "p01", "task": "unknown_goal",
+    ...         "method": "PBA", "phase": "demonstration", "source": "human"}
+    >>> [(p.where, p.rule) for p in check_meta(meta, "t.json")]
+    [("key 'method'", 'phase-method')]
+    >>> [p.rule for p in check_meta({"participant": "p01"}, "t.json")][:2]
+    ['required-key', 'required-key']
+    """
+    if not isinstance(meta, dict):
+        return [Problem(file, "", "json-object", "the metadata must be a JSON object")]
+    problems = []
+
+    def bad(key: str, rule: str, message: str) -> None:
+        problems.append(Problem(file, f"key {key!r}", rule, message))
+
+    for key in META_REQUIRED:
+        if key not in meta:
+            bad(key, "required-key", "missing")
+    allowed = ", ".join(META_REQUIRED + META_OPTIONAL)
+    for key in sorted(set(meta) - set(META_REQUIRED) - set(META_OPTIONAL)):
+        bad(key, "unknown-key", f"not part of {SCHEMA}; allowed keys: {allowed}")
+    for key, rule, check in META_RULES:
+        if key in meta:
+            message = check(meta[key], meta)
+            if message is not None:
+                bad(key, rule, message)
+    return problems
+
+
+# --------------------------------------------------------------------------- trial CSV
+
+_FRAME_ALLOWED = "allowed: " + ", ".join(
+    [*FRAME_REQUIRED, *FRAME_OPTIONAL, f"{JOINTS[0]}..{JOINTS[-1]}"]
+    + [f"{prefix}:NAME" for prefix in INTENT_PREFIXES]
+)
+
+
+def _known_column(name: str) -> bool:
+    if name in FRAME_REQUIRED or name in FRAME_OPTIONAL or name in JOINTS:
+        return True
+    prefix, _, intent = name.partition(":")
+    return prefix in INTENT_PREFIXES and bool(intent.strip())
+
+
+def _check_keys(keys: pd.Series, file: str, problems: list) -> None:
+    tokens = keys.str.split()
+    unknown = tokens.map(lambda held: any(k not in KEYS for k in held))
+    if unknown.any():
+        first = keys[unknown].iloc[0]
+        problems.append(
+            Problem(
+                file,
+                f"column 'keys', {where_lines(unknown)}",
+                "keys",
+                f"got {first!r}; expected space-separated names from {' '.join(KEYS)}, "
+                "empty when none",
+            )
+        )
+    repeated = tokens.map(lambda held: len(set(held)) != len(held))
+    if repeated.any():
+        problems.append(
+            Problem(
+                file, f"column 'keys', {where_lines(repeated)}", "keys", "a key is listed twice"
+            )
+        )
+
+
+def parse_trial_csv(
+    text: str, file: str, *, meta: dict | None = None
+) -> tuple[pd.DataFrame | None, list[Problem]]:
+    """Parse a trial's CSV text and check it against casa-trial/1.
+
+    Parameters
+    ----------
+    text : str
+        The file's content.
+    file : str
+        Its name, used in problems.
+    meta : dict, optional
+        The trial's metadata; when it lists ``intents``, every ``beta:NAME`` and
+        ``belief:NAME`` column must name one of them.
+
+    Returns
+    -------
+    frame : pandas.DataFrame or None
+        Typed table (None when the file cannot be read as a table).
+    problems : list of Problem
+
+    Examples
+    --------
+    >>> text = "t,x,y,z,rot,keys,alpha\\n0,0.45,-0.22,0.38,0,x+,1\\n0.05,0.46,-0.22,0.38,0,,2\\n"
+    >>> frame, problems = parse_trial_csv(text, "t.csv")
+    >>> frame["keys"].tolist()
+    ['x+', '']
+    >>> print(problems[0])
+    t.csv: column 'alpha', line 3: [range] must be in [0, 1], got np.float64(2.0)
+    """
+    cells, problems = read_csv_cells(text, file)
+    if cells is None:
+        return None, problems
+    problems += check_columns(
+        cells, file, FRAME_REQUIRED, _known_column, f"not part of {SCHEMA}; {_FRAME_ALLOWED}"
+    )
+    if len(cells) == 0:
+        problems.append(Problem(file, "", "non-empty", "no rows; expected one row per tick"))
+    intents = meta.get("intents") if isinstance(meta, dict) else None
+    frame = pd.DataFrame(index=cells.index)
+    for column in cells.columns:
+        if column == "keys" or not _known_column(column):
+            continue
+        values = numeric(cells, column, file, problems)
+        frame[column] = values
+        bounds = COLUMN_RANGES.get(column.partition(":")[0])
+        if bounds is not None:
+            in_range(values, column, file, problems, *bounds)
+        if ":" in column and isinstance(intents, list):
+            name = column.partition(":")[2]
+            if name not in intents:
+                problems.append(
+                    Problem(
+                        file,
+                        f"column {column!r}",
+                        "intent-name",
+                        f"intent {name!r} is not in the metadata's intents {intents}",
+                    )
+                )
+    if "t" in frame.columns and len(frame) > 1:
+        t = frame["t"]
+        not_increasing = t.diff().le(0) & t.notna() & t.shift().notna()
+        if not_increasing.any():
+            problems.append(
+                Problem(
+                    file,
+                    f"column 't', {where_lines(not_increasing)}",
+                    "t-increasing",
+                    "t must be strictly increasing (one row per tick, in order)",
+                )
+            )
+    if "t" in frame.columns:
+        in_range(frame["t"], "t", file, problems, *TIME_RANGE)
+    if "keys" in cells.columns:
+        frame["keys"] = cells["keys"]
+        _check_keys(cells["keys"], file, problems)
+    ordered = [c for c in cells.columns if c in frame.columns]
+    return frame[ordered].reset_index(drop=True), problems
+
+
+# --------------------------------------------------------------------------- surveys
+
+
+def parse_surveys_csv(text: str, file: str) -> tuple[pd.DataFrame | None, list[Problem]]:
+    """Parse a ``surveys.csv`` text and check it.
+
+    Parameters
+    ----------
+    text : str
+        The file's content.
+    file : str
+        Its name, used in problems.
+
+    Returns
+    -------
+    frame : pandas.DataFrame or None
+        The answers with ``score`` as int; None when there is any problem.
+    problems : list of Problem
+
+    Examples
+    --------
+    >>> text = ("participant,task,method,phase,question,score\\n"
+    ...         "p01,known_goal,NA,no_misspecification,useful,5\\n")
+    >>> frame, problems = parse_surveys_csv(text, "surveys.csv")
+    >>> frame["score"].tolist(), problems
+    ([5], [])
+    >>> _, problems = parse_surveys_csv(text.replace("useful,5", "fun,8"), "surveys.csv")
+    >>> [(p.where, p.rule) for p in problems]
+    [("column 'question', line 2", 'enum'), ("column 'score', line 2", 'likert-score')]
+    """
+    cells, problems = read_csv_cells(text, file)
+    if cells is None:
+        return None, problems
+    allowed = SURVEY_COLUMNS + SURVEY_OPTIONAL
+    problems += check_columns(
+        cells,
+        file,
+        SURVEY_COLUMNS,
+        allowed.__contains__,
+        f"not part of the surveys contract; allowed: {', '.join(allowed)}",
+    )
+    if problems:
+        return None, problems
+    empty = cells["participant"].str.strip().eq("")
+    if empty.any():
+        problems.append(
+            Problem(
+                file, f"column 'participant', {where_lines(empty)}", "non-empty-string", "is empty"
+            )
+        )
+    for column, values in SURVEY_ENUMS:
+        if column not in cells.columns:
+            continue  # an optional column
+        outside = ~cells[column].isin(values)
+        if outside.any():
+            problems.append(
+                Problem(
+                    file,
+                    f"column {column!r}, {where_lines(outside)}",
+                    "enum",
+                    f"got {cells[column][outside].iloc[0]!r}, expected one of {', '.join(values)}",
+                )
+            )
+    score_ok = cells["score"].str.strip().isin([str(s) for s in LIKERT_SCORES])
+    if not score_ok.all():
+        problems.append(
+            Problem(
+                file,
+                f"column 'score', {where_lines(~score_ok)}",
+                "likert-score",
+                f"got {cells['score'][~score_ok].iloc[0]!r}, expected an integer "
+                f"{LIKERT_SCORES[0]} to {LIKERT_SCORES[-1]}",
+            )
+        )
+    repeated = cells.duplicated(subset=list(SURVEY_ANSWER_KEY), keep="first")
+    if repeated.any():
+        problems.append(
+            Problem(
+                file,
+                where_lines(repeated),
+                "unique-answer",
+                "a participant answers each question once per task, method and phase",
+            )
+        )
+    if problems:
+        return None, problems
+    frame = cells.copy()
+    frame["score"] = frame["score"].str.strip().astype(int)
+    return frame.reset_index(drop=True), problems

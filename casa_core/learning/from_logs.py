@@ -1,0 +1,105 @@
+"""Learning from recorded trials: demonstration logs in, an intent file in a library out."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from pathlib import Path
+
+from casa_core.io import find_files, read_trial
+from casa_core.learning.config import IRLConfig
+from casa_core.learning.maxent import MaxEntIRL
+from casa_core.library import intent_path, save_intent
+
+
+def read_demonstrations(
+    folder: Path | str, task: str | None = None, *, phase: str | None = "demonstration"
+) -> tuple[list, list[dict]]:
+    """The demonstrations in ``folder`` (the casa-trial/1 logs below it, sorted).
+
+    Logs are read with :func:`casa_core.io.read_trial` (which validates them);
+    with ``task``, only that task's trials are kept; with ``phase`` (by default
+    ``"demonstration"``), only the trials of that phase, so that a participant's
+    folder can be given whole: its assisted trials, where the robot pulled the
+    arm toward another intent, are not demonstrations. ``phase=None`` keeps
+    every phase.
+
+    Returns
+    -------
+    demos : list of numpy.ndarray
+        Each ``(n, 5)`` of ``[t, x, y, z, rot]``.
+    metas : list of dict
+        Their metadata, in the same order.
+
+    Raises
+    ------
+    ValueError
+        If the folder has no trial (of that task and phase); :class:`casa_core.io.LogError`
+        if a log breaks the contract.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ValueError(f"{folder}: demonstrations folder not found")
+    stems = [p.with_suffix("") for p in find_files(folder) if p.suffix == ".json"]
+    demos, metas, skipped = [], [], set()
+    for stem in stems:
+        meta, frame = read_trial(stem)
+        if task is not None and meta["task"] != task:
+            continue
+        if phase is not None and meta["phase"] != phase:
+            skipped.add(meta["phase"])
+            continue
+        demos.append(frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float))
+        metas.append(meta)
+    if not demos:
+        which = f" of task {task!r}" if task else ""
+        which += f" in phase {phase!r}" if phase else ""
+        found = f" (found phases: {', '.join(sorted(skipped))})" if skipped else ""
+        raise ValueError(
+            f"{folder}: no trial log{which} found (casa-trial/1 .json + .csv pairs){found}"
+        )
+    return demos, metas
+
+
+def learn_to_library(
+    demos_folder: Path | str,
+    name: str,
+    *,
+    library: Path | str,
+    objects: Mapping,
+    seed: int = 0,
+    task: str | None = None,
+    participant: str | None = None,
+    config: IRLConfig | None = None,
+    phase: str | None = "demonstration",
+) -> tuple[Path, list[dict], float]:
+    """Learn intent ``name`` from the logs in ``demos_folder`` and save it in ``library``.
+
+    ``task`` and ``phase`` filter the logs (:func:`read_demonstrations`); the
+    scene ``objects`` (name -> position) are the cost's features
+    (:meth:`MaxEntIRL.fit`). The task and participant stored default to those of
+    the logs when they all agree (else ""). Returns the file, the training history
+    and the training time in seconds.
+    """
+    config = IRLConfig() if config is None else config
+    intent_path(library, name)  # a bad name fails before training
+    demos, metas = read_demonstrations(demos_folder, task, phase=phase)
+
+    def agreed(key: str) -> str:
+        values = {str(m.get(key, "")) for m in metas}
+        return values.pop() if len(values) == 1 else ""
+
+    began = time.perf_counter()
+    learner = MaxEntIRL(name, config=config, seed=seed).fit(demos, objects)
+    seconds = time.perf_counter() - began
+    path = save_intent(
+        library,
+        learner.intent_,
+        task=agreed("task") if task is None else task,
+        participant=agreed("participant") if participant is None else participant,
+        seed=seed,
+        demos=demos,
+        history=learner.history_,
+        config=config,
+    )
+    return path, learner.history_, seconds

@@ -1,0 +1,231 @@
+"""The closed loop: one task, one assistance method, one key source, pybullet in the loop.
+
+Every control tick (0.05 s) :func:`run_trial` reads the arm's state ``[x, y, z, rot]``
+from pybullet, asks the key source (:mod:`casa_core.study.key_sources`) which keys are
+held, turns them into the user's Cartesian action (the paper's direct teleoperation T),
+lets the :class:`~casa_core.assistant.Assistant` blend it with the robot's action u*,
+and drives the arm with the blend for one tick. Every 0.5 s (twice per second, as in
+the paper) the assistant first updates its inference with the state reached. The trial
+ends when the key source says it is done or at ``max_duration``.
+
+The methods are the paper's: NA (direct teleoperation; the assistant still infers, so
+the log shows what it would have believed), PBA (policy blending with distance
+arbitration and beta = 1), CASA (confidence arbitration) and BELIEF (arbitration on
+the belief in the most likely intent, for the arbitration analysis only: casa-trial/1
+has no BELIEF method, so such trials are returned, not written).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from casa_core.assistant import Assistant
+from casa_core.intents import GoalIntent, Intent
+from casa_core.io import write_trial
+from casa_core.robot.keys import check_keys, format_keys, keys_to_action
+from casa_core.robot.sim import ArmSimulation
+from casa_core.scene import Scene
+from casa_core.study.key_sources import KeySource
+from casa_core.vocabulary import METHODS, TASK_PHASES
+
+#: Arbitration of the assistant under each method.
+METHOD_ARBITRATION = {"NA": "none", "PBA": "distance", "CASA": "confidence", "BELIEF": "belief"}
+#: The goals the robot knows from the start (paper, Sec. IV).
+KNOWN_GOALS = ("green", "purple")
+#: Seconds between inference steps: twice per second (paper, Sec. IV-A).
+INFERENCE_PERIOD = 0.5
+
+
+@dataclass
+class TrialResult:
+    """A finished trial: its casa-trial/1 metadata and one row per control tick."""
+
+    meta: dict
+    frame: pd.DataFrame
+
+    def write(self, stem: Path | str) -> None:
+        """Write ``<stem>.json`` and ``<stem>.csv`` through :func:`casa_core.io.write_trial`."""
+        if self.meta["method"] not in METHODS:
+            raise ValueError(
+                f"method {self.meta['method']!r} cannot be logged: casa-trial/1 methods are "
+                f"{', '.join(METHODS)}; use the returned frame instead"
+            )
+        write_trial(stem, self.meta, self.frame)
+
+
+def known_goal_intents(scene: Scene, names: Sequence[str] = KNOWN_GOALS, **options) -> list:
+    """Goal intents for the named goals of the scene (``scene.goals``).
+
+    Examples
+    --------
+    >>> from casa_core.scene import load_scene
+    >>> [intent.name for intent in known_goal_intents(load_scene())]
+    ['green', 'purple']
+    """
+    missing = [name for name in names if name not in scene.goals]
+    if missing:
+        raise ValueError(f"scene: goals has no {', '.join(missing)}")
+    return [GoalIntent(name, scene.goals[name], **options) for name in names]
+
+
+def trial_intents(scene: Scene, learned: Sequence[Path | str] = ()) -> list:
+    """What the robot knows: the known goals, then each learned intent file (casa-intent/1).
+
+    Raises
+    ------
+    casa_core.library.LibraryError
+        (a ``ValueError``) naming a learned-intent file that cannot be used.
+    """
+    intents = known_goal_intents(scene)
+    if learned:
+        from casa_core.library import load_intent  # torch and the IRL code load only if needed
+
+        intents += [load_intent(path).intent for path in learned]
+    return intents
+
+
+def default_phase(task: str) -> str:
+    """The phase of a task's first trial: ``before_learning`` for the unknown tasks.
+
+    Examples
+    --------
+    >>> default_phase("known_goal"), default_phase("unknown_skill")
+    ('no_misspecification', 'before_learning')
+    """
+    if task not in TASK_PHASES:
+        raise ValueError(f"unknown task {task!r}; expected one of {', '.join(TASK_PHASES)}")
+    phases = TASK_PHASES[task]
+    return "before_learning" if "before_learning" in phases else phases[0]
+
+
+def run_trial(
+    scene: Scene,
+    task: str,
+    method: str,
+    source: KeySource,
+    *,
+    participant: str,
+    intents: Sequence[Intent] | None = None,
+    phase: str | None = None,
+    source_kind: str = "simulated",
+    max_duration: float = 30.0,
+    sim: ArmSimulation | None = None,
+    assistant_options: dict | None = None,
+    on_tick: Callable[[float, np.ndarray, frozenset, float], None] | None = None,
+    seed: int | None = None,
+) -> TrialResult:
+    """Run one trial in closed loop with pybullet and return its log.
+
+    Parameters
+    ----------
+    scene : Scene
+        The task scene; the arm starts at ``scene.start_state``.
+    task : str
+        ``familiarization``, ``known_goal``, ``unknown_goal`` or ``unknown_skill``.
+    method : {"NA", "PBA", "CASA", "BELIEF"}
+    source : KeySource
+        Gives the held keys each tick; the trial ends when ``source.done`` turns true.
+    participant : str
+        Participant id written to the log.
+    intents : sequence of Intent, optional
+        What the robot knows; default the known goals green and purple.
+    phase : str, optional
+        Log phase; default :func:`default_phase` of the task.
+    source_kind : {"simulated", "human"}
+    max_duration : float
+        Seconds after which the trial stops even if the source is not done.
+    sim : ArmSimulation, optional
+        Simulation to run in (e.g. a window); default a new headless one, closed after.
+    assistant_options : dict, optional
+        Extra keyword arguments of :class:`~casa_core.assistant.Assistant`.
+    on_tick : callable, optional
+        ``on_tick(t, state, keys, alpha)`` after each logged tick (windows, pacing).
+    seed : int, optional
+        Recorded in the metadata.
+
+    Returns
+    -------
+    TrialResult
+    """
+    if method not in METHOD_ARBITRATION:
+        raise ValueError(f"unknown method {method!r}; expected one of {list(METHOD_ARBITRATION)}")
+    phase = default_phase(task) if phase is None else phase
+    intents = known_goal_intents(scene) if intents is None else list(intents)
+    teleop = scene.teleop
+    ticks_per_inference = int(round(INFERENCE_PERIOD / teleop.dt))
+    if ticks_per_inference < 1 or abs(ticks_per_inference * teleop.dt - INFERENCE_PERIOD) > 1e-9:
+        raise ValueError(
+            f"scene: teleop.dt = {teleop.dt} s must divide the inference period "
+            f"{INFERENCE_PERIOD} s into whole ticks"
+        )
+    assistant = Assistant(
+        intents,
+        arbitration=METHOD_ARBITRATION[method],
+        dt=INFERENCE_PERIOD,
+        speed=teleop.speed,
+        rot_speed=teleop.rot_speed,
+        tick=teleop.dt,
+        **(assistant_options or {}),
+    )
+    own_sim = sim is None
+    sim = ArmSimulation(scene) if own_sim else sim
+    try:
+        rows = _closed_loop(
+            sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick
+        )
+    finally:
+        if own_sim:
+            sim.close()
+    meta = {
+        "participant": str(participant),
+        "task": task,
+        "method": method,
+        "phase": phase,
+        "source": source_kind,
+        "intents": [intent.name for intent in intents],
+    }
+    if assistant.arbitration != "none":  # what inference observed (Assistant, evidence)
+        meta["notes"] = f"evidence: {assistant.evidence}"
+    if seed is not None:
+        meta["seed"] = int(seed)
+    return TrialResult(meta=meta, frame=pd.DataFrame(rows))
+
+
+def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick):
+    teleop = scene.teleop
+    dt = teleop.dt
+    state = sim.reset(scene.start_state)
+    assistant.reset(state)
+    names = assistant.names
+    # No evidence before the first inference step: beta_hat = 0, uniform belief.
+    beta = dict.fromkeys(names, 0.0)
+    belief = dict.fromkeys(names, 1.0 / len(names))
+    alpha = 1.0
+    rows = []
+    for tick in range(int(round(max_duration / dt)) + 1):
+        t = tick * dt
+        if tick > 0 and tick % ticks_per_inference == 0:
+            inference = assistant.update(state)
+            beta, belief, alpha = inference.beta, inference.belief, inference.alpha
+        held = check_keys(source.keys(t, state))
+        row = {"t": round(t, 6), "x": state[0], "y": state[1], "z": state[2], "rot": state[3]}
+        row["keys"] = format_keys(held)
+        row["alpha"] = alpha
+        row.update({f"q{i + 1}": angle for i, angle in enumerate(sim.q)})
+        row.update({f"beta:{name}": beta[name] for name in names})
+        row.update({f"belief:{name}": belief[name] for name in names})
+        rows.append(row)
+        if on_tick is not None:
+            on_tick(t, state, held, alpha)
+        if getattr(source, "done", False):
+            break
+        user_action = keys_to_action(held, teleop.speed, teleop.rot_speed)
+        elapsed = (tick % ticks_per_inference) * dt
+        action = assistant.act(state, user_action, elapsed_in_step=elapsed)
+        state = sim.step(action)
+    return rows

@@ -1,0 +1,255 @@
+"""The workflow config: one schema, one loader, errors naming the file and the key."""
+
+from __future__ import annotations
+
+import inspect
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from test_logs_synthetic import ROOT, write_dataset
+from test_workflow import ENV, copy_workflow, snakemake
+
+from casa_core import assistant
+from casa_core.config import (
+    DEFAULT_CONFIG,
+    SCHEMA_PATH,
+    ConfigError,
+    default,
+    load_config,
+    schema,
+    validate_config,
+)
+
+CONFIG = ROOT / "config" / "config.yaml"
+CI = ROOT / "config" / "ci.yaml"
+CASA = str(Path(sys.executable).parent / "casa")
+
+
+def _objects(node: dict, key: str = ""):
+    """Every object node of the schema with its dotted key."""
+    if node.get("type") == "object":
+        yield key, node
+        for name, sub in node.get("properties", {}).items():
+            yield from _objects(sub, f"{key}.{name}" if key else name)
+
+
+def test_the_schema_closes_every_level_and_every_key_is_required_or_defaulted():
+    objects = dict(_objects(schema()))
+    assert {"", "simulation", "simulation.population", "case_study"} <= set(objects)
+    assert "simulation.population.max_keys" in objects
+    for key, node in objects.items():
+        assert node["additionalProperties"] is False, key
+        assert "required" in node, key
+        for name, sub in node["properties"].items():
+            assert ("default" in sub) != (name in node["required"]), f"{key}.{name}"
+            assert "type" in sub or "enum" in sub, f"{key}.{name}"
+
+
+def test_the_schema_is_package_data():
+    assert SCHEMA_PATH.parent == Path(assistant.__file__).parent
+    assert SCHEMA_PATH.suffix == ".yaml"  # pyproject's package-data takes **/*.yaml
+
+
+def test_the_schema_defaults_are_the_models():
+    parameters = inspect.signature(assistant.Assistant).parameters
+    for section in ("simulation", "case_study"):
+        assert default(f"{section}.epsilon") == assistant.EPSILON
+        assert default(f"{section}.evidence") == parameters["evidence"].default
+
+
+def test_the_study_config_is_complete_and_ci_only_overlays_it():
+    study = load_config(CONFIG)
+    assert study == load_config(DEFAULT_CONFIG)
+    ci = load_config(CONFIG, CI)
+    assert ci["simulation"]["participants"] == 3
+    ci["simulation"]["participants"] = study["simulation"]["participants"]
+    assert ci == study
+    assert yaml.safe_load(CI.read_text()) == {"simulation": {"participants": 3}}
+
+
+def test_defaults_are_filled_in_from_the_schema():
+    data = yaml.safe_load(CONFIG.read_text())
+    for key in ("allow_invalid", "simulate"):
+        del data[key]
+    for key in ("max_duration", "demonstrations", "demonstrations_when", "epsilon", "evidence"):
+        del data["simulation"][key]
+    config = validate_config(data)
+    assert config == load_config(CONFIG)
+    assert config["case_study"]["epsilon"] == 1.0 and config["simulation"]["max_duration"] == 40.0
+
+
+@pytest.mark.parametrize(
+    "overlay, message",
+    [
+        (
+            {"simulation": {"max_duraton": 20.0}},
+            "overlay.yaml: simulation.max_duraton: unknown key; did you mean max_duration?",
+        ),
+        (
+            {"simulation": {"demonstrations_whn": "detected"}},
+            "overlay.yaml: simulation.demonstrations_whn: unknown key",
+        ),
+        (
+            {"simulation": {"populaton": {}}},
+            "overlay.yaml: simulation.populaton: unknown key; did you mean population?",
+        ),
+        (
+            {"simulation": {"population": {"deadband": {"median": 0.01, "sgima": 0.1}}}},
+            "overlay.yaml: simulation.population.deadband.sgima: unknown key",
+        ),
+        ({"case_study": {"evidence": "felt"}}, "case_study.evidence: must be one of commanded"),
+        ({"simulation": {"participants": 0}}, "simulation.participants: must be >= 1, got 0"),
+        ({"simulation": {"epsilon": "high"}}, "simulation.epsilon: must be a number, got 'high'"),
+        ({"simulation": 3}, "overlay.yaml: simulation: must be a mapping, got 3"),
+        (
+            {"simulation": {"population": {"max_keys": {"values": [1, 2]}}}},
+            "simulation.population.max_keys.p: must have as many entries as values (2)",
+        ),
+        (
+            {"simulation": {"population": {"max_keys": {"values": [1, 2], "p": [0.5, 0.4]}}}},
+            "simulation.population.max_keys.p: must sum to 1, got 0.9",
+        ),
+    ],
+)
+def test_a_bad_overlay_is_refused_naming_the_file_and_the_key(tmp_path, overlay, message):
+    path = tmp_path / "overlay.yaml"
+    path.write_text(yaml.safe_dump(overlay))
+    with pytest.raises(ConfigError, match="overlay.yaml") as error:
+        load_config(CONFIG, path)
+    assert message in str(error.value)
+
+
+def test_a_missing_required_key_is_named(tmp_path):
+    data = yaml.safe_load(CONFIG.read_text())
+    del data["simulation"]["participants"]
+    del data["case_study"]["seed"]
+    path = tmp_path / "partial.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ConfigError) as error:
+        load_config(path)
+    assert str(error.value).splitlines() == [
+        f"{path}: case_study.seed: missing (required)",
+        f"{path}: simulation.participants: missing (required)",
+    ]
+
+
+def test_command_line_strings_become_the_schemas_types():
+    config = load_config(
+        CONFIG, overrides={"allow_invalid": "true", "simulation": {"participants": "3"}}
+    )
+    assert config["allow_invalid"] is True and config["simulation"]["participants"] == 3
+    with pytest.raises(ConfigError, match="--config: allow_invalid: must be a boolean"):
+        load_config(CONFIG, overrides={"allow_invalid": "maybe"})
+
+
+def test_unreadable_files_are_named(tmp_path):
+    with pytest.raises(ConfigError, match="cannot read the config .*nowhere.yaml"):
+        load_config(tmp_path / "nowhere.yaml")
+    (tmp_path / "list.yaml").write_text("- 1\n")
+    with pytest.raises(ConfigError, match="list.yaml: must be a mapping"):
+        load_config(tmp_path / "list.yaml")
+
+
+@pytest.fixture
+def workflow_copy(tmp_path):
+    return copy_workflow(tmp_path / "wf")
+
+
+@pytest.mark.parametrize(
+    "where, old, new, message",
+    [
+        ("config/ci.yaml", "participants: 3", "max_duraton: 20.0", "simulation.max_duraton"),
+        (
+            "config/config.yaml",
+            "demonstrations_when:",
+            "demonstrations_whn:",
+            "simulation.demonstrations_whn",
+        ),
+        ("config/config.yaml", "  population:", "  populaton:", "simulation.populaton"),
+        ("config/config.yaml", "  participants: 11\n", "", "simulation.participants: missing"),
+    ],
+)
+def test_snakemake_dry_run_refuses_a_bad_config_naming_the_key(
+    workflow_copy, where, old, new, message
+):
+    path = workflow_copy / where
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new))
+    overlay = ["--configfile", where] if where == "config/ci.yaml" else []
+    result = snakemake(workflow_copy, "--dry-run", *overlay)
+    assert result.returncode != 0
+    text = result.stdout + result.stderr
+    assert "ConfigError" in text and message in text, text[-2000:]
+    if overlay:
+        assert f"config/ci.yaml: {message}: unknown key" in text
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--config", "allow_invalid=maybe"], "--config: allow_invalid: must be a boolean"),
+        (["--config", "alow_invalid=true"], "--config: alow_invalid: unknown key"),
+    ],
+)
+def test_snakemake_refuses_bad_command_line_config_naming_the_key(workflow_copy, args, message):
+    result = snakemake(workflow_copy, "--dry-run", *args)
+    assert result.returncode != 0
+    assert message in result.stdout + result.stderr
+
+
+def test_snakemake_merges_the_ci_overlay_over_the_config(workflow_copy):
+    result = snakemake(
+        workflow_copy, "--dry-run", "--configfile", "config/ci.yaml", "--config", "simulate=false"
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    effective = workflow_copy / "data" / "interim" / "config.yaml"
+    seen = yaml.safe_load(effective.read_text())
+    assert seen == load_config(CONFIG, CI, overrides={"simulate": "false"})
+    # The package commands read it back through the same loader.
+    assert load_config(effective) == seen
+
+
+def _casa(cwd: Path, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [CASA, *args], cwd=cwd, env=ENV, capture_output=True, text=True, timeout=120
+    )
+
+
+def test_the_commands_work_from_any_directory(tmp_path):
+    write_dataset(tmp_path / "raw", participants=("p01",))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    result = _casa(elsewhere, "validate", str(tmp_path / "raw"))
+    assert result.returncode == 0, result.stderr
+    assert "0 problem(s)" in result.stderr
+    result = _casa(elsewhere, "teleop", "--help")
+    assert result.returncode == 0 and "--epsilon" in result.stdout, result.stderr
+    assert f"(default {assistant.EPSILON})" in " ".join(result.stdout.split())
+
+
+def test_the_workflow_commands_refuse_a_bad_config_naming_the_key(tmp_path):
+    overlay = tmp_path / "overlay.yaml"
+    overlay.write_text("case_study: {sed: 1}\n")
+    result = _casa(
+        ROOT,
+        "case-study",
+        "--config",
+        str(CONFIG),
+        "--config",
+        str(overlay),
+        "--work",
+        str(tmp_path / "work"),
+        "--steps",
+        str(tmp_path / "steps.csv"),
+        "--arbitration",
+        str(tmp_path / "arbitration.csv"),
+    )
+    assert result.returncode == 2
+    assert f"casa case-study: {overlay}: case_study.sed: unknown key; did you mean seed?" in (
+        result.stderr
+    )
+    assert not (tmp_path / "work").exists()
