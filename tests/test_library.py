@@ -14,8 +14,8 @@ import torch
 from casa_core import library
 from casa_core.io import write_trial
 from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
-from casa_core.learning.from_logs import read_demonstrations
 from casa_core.scene import load_scene
+from casa_core.study.learn_from_logs import read_demonstrations
 from casa_core.study.learning_evidence import scene_objects
 
 OBJECTS = scene_objects(load_scene())

@@ -45,8 +45,8 @@ def _add_learn(commands) -> None:
 def _learn(args) -> int:
     from casa_core.io import LogError
     from casa_core.learning import IRLConfig
-    from casa_core.learning.from_logs import learn_to_library
     from casa_core.scene import load_scene
+    from casa_core.study.learn_from_logs import learn_to_library
     from casa_core.study.learning_evidence import scene_objects
 
     config = IRLConfig()

@@ -9,7 +9,7 @@ each with one job:
 - :mod:`~casa_core.learning.config`: the settings (:class:`IRLConfig`);
 - :mod:`~casa_core.learning.demonstrations`: demonstrations resampled for IRL;
 - :mod:`~casa_core.learning.maxent`: the estimator (:class:`MaxEntIRL`);
-- :mod:`~casa_core.learning.from_logs`: trial logs in, an intent library file out
+- :mod:`~casa_core.study.learn_from_logs`: trial logs in, an intent library file out
   (imported on its own: it uses :mod:`casa_core.library`, which uses this package).
 """
 

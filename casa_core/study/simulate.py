@@ -125,8 +125,8 @@ def learn_from_demonstrations(
     endpoint_error_m, final_tilt_deg, train_seconds``; empty values when the
     participant gave no demonstrations of the task.
     """
-    from casa_core.learning.from_logs import learn_to_library, read_demonstrations
     from casa_core.library import load_intent
+    from casa_core.study.learn_from_logs import learn_to_library, read_demonstrations
     from casa_core.study.learning_evidence import learning_evidence, scene_objects
 
     name = LEARNED_NAMES[task]
