@@ -20,32 +20,22 @@ import numpy as np
 from casa_core._checks import require_positive
 from casa_core.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance, blend
 from casa_core.confidence import _beta_hat, _suboptimality
+from casa_core.defaults import (
+    DT,
+    EPSILON,
+    HORIZON,
+    LAM,
+    PBA_DISTANCE,
+    ROT_SPEED,
+    SPEED,
+    SUBOPT_SCALE,
+    TICK,
+    K,
+)
 from casa_core.inference import _log_likelihood, _posterior
-from casa_core.intents import DT, SPEED
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
 EVIDENCE = ("commanded", "executed")
-
-# Defaults of the model's parameters, written once; where each value comes from and what
-# restores another choice: docs/departures.md (symbols: docs/paper-to-code.md).
-#: k, the action dimensionality: the JACO arm's 7 joint velocities.
-K = 7
-#: lambda, the rate of the exponential prior on beta (the original implementation's).
-LAM = 4.0
-#: epsilon, the misspecification threshold on beta_hat (not in the original; related work's).
-EPSILON = 1.0
-#: D of distance arbitration (PBA), metres (the original implementation's).
-PBA_DISTANCE = 0.55
-#: Factor on the suboptimality: the original implementation divides it by 1.8.
-SUBOPT_SCALE = 1 / 1.8
-#: T, the episode horizon, seconds (the original implementation's).
-HORIZON = 15.0
-# DT (seconds between inference steps and trajectory states: inference twice per second)
-# and SPEED (the speed limit of u*, m/s) are the intents' (casa_core.intents).
-#: Rotation speed limit of u* (rad/s), the keyboard's rotate keys.
-ROT_SPEED = 0.5
-#: The control tick, seconds (20 Hz).
-TICK = 0.05
 
 
 @dataclass(frozen=True)

@@ -16,15 +16,9 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from casa_core._checks import require_positive
+from casa_core.defaults import COST_PER_METRE, DT, SPEED
 
 COST_FORMS = ("path_length", "distance_sum")
-# Defaults written once (the assistant uses the same; see docs/departures.md).
-#: Seconds between trajectory states: the original implementation's waypoint step.
-DT = 0.5
-#: Fastest end-effector speed of an optimal trajectory, m/s: the keyboard's speed.
-SPEED = 0.05
-#: Cost per metre of end-effector path: the original implementation's 50 / 0.22, rounded.
-COST_PER_METRE = 227.0
 
 
 class Intent(ABC):

@@ -12,7 +12,7 @@ import yaml
 from test_logs_synthetic import ROOT, write_dataset
 from test_workflow import ENV, copy_workflow, snakemake
 
-from casa_core import assistant
+from casa_core import assistant, defaults
 from casa_core.config import (
     DEFAULT_CONFIG,
     SCHEMA_PATH,
@@ -56,8 +56,9 @@ def test_the_schema_is_package_data():
 def test_the_schema_defaults_are_the_models():
     parameters = inspect.signature(assistant.Assistant).parameters
     for section in ("simulation", "case_study"):
-        assert default(f"{section}.epsilon") == assistant.EPSILON
+        assert default(f"{section}.epsilon") == defaults.EPSILON
         assert default(f"{section}.evidence") == parameters["evidence"].default
+    assert default("simulation.demonstrations") == defaults.DEMONSTRATIONS
 
 
 def test_the_study_config_is_complete_and_ci_only_overlays_it():
@@ -228,7 +229,7 @@ def test_the_commands_work_from_any_directory(tmp_path):
     assert "0 problem(s)" in result.stderr
     result = _casa(elsewhere, "teleop", "--help")
     assert result.returncode == 0 and "--epsilon" in result.stdout, result.stderr
-    assert f"(default {assistant.EPSILON})" in " ".join(result.stdout.split())
+    assert f"(default {defaults.EPSILON})" in " ".join(result.stdout.split())
 
 
 def test_the_workflow_commands_refuse_a_bad_config_naming_the_key(tmp_path):

@@ -23,7 +23,8 @@ def _add_teleop(commands) -> None:
         "goes to OUT/<task>_<phase>_<method>.{json,csv} (casa-trial/1).",
     )
     # The model's defaults, written once in the assistant.
-    from casa_core.assistant import EPSILON, EVIDENCE
+    from casa_core.assistant import EVIDENCE
+    from casa_core.defaults import DEMONSTRATIONS, EPSILON
 
     command.add_argument("--task", required=True, choices=vocabulary.TASKS)
     command.add_argument("--method", required=True, choices=vocabulary.METHODS)
@@ -45,10 +46,10 @@ def _add_teleop(commands) -> None:
     command.add_argument(
         "--demonstrations",
         type=int,
-        default=5,
+        default=DEMONSTRATIONS,
         metavar="N",
         help="after a CASA trial before learning that finds every known intent's confidence "
-        "below --epsilon, ask for and record N demonstrations (default 5; 0: never)",
+        "below --epsilon, ask for and record N demonstrations (default %(default)s; 0: never)",
     )
     command.add_argument(
         "--epsilon",

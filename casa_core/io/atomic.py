@@ -37,6 +37,15 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
     For writers that need a file name (matplotlib, torch). The temporary file keeps
     ``path``'s suffix, so that writers that choose a format by suffix still do.
     On an error the temporary file is removed and ``path`` is untouched.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> target = Path(tempfile.mkdtemp()) / "figure.png"
+    >>> with atomic_path(target) as tmp:
+    ...     _ = tmp.write_bytes(b"png")
+    >>> target.read_bytes()
+    b'png'
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -52,14 +61,28 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
 
 
 def atomic_write_bytes(path: Path | str, data: bytes) -> Path:
-    """Write ``data`` to ``path`` atomically; return the path."""
+    """Write ``data`` to ``path`` atomically; return the path.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> atomic_write_bytes(Path(tempfile.mkdtemp()) / "weights.bin", b"1").read_bytes()
+    b'1'
+    """
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
     return Path(path)
 
 
 def atomic_write_text(path: Path | str, text: str) -> Path:
-    """Write ``text`` (UTF-8, line ends as given) to ``path`` atomically; return the path."""
+    """Write ``text`` (UTF-8, line ends as given) to ``path`` atomically; return the path.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> atomic_write_text(Path(tempfile.mkdtemp()) / "stats.md", "# H1\\n").read_text()
+    '# H1\\n'
+    """
     return atomic_write_bytes(path, text.encode("utf-8"))
 
 
@@ -79,5 +102,13 @@ def frame_to_csv_text(frame: pd.DataFrame) -> str:
 
 
 def write_csv(path: Path | str, frame: pd.DataFrame) -> Path:
-    """Write a table as CSV (:func:`frame_to_csv_text`) atomically; return the path."""
+    """Write a table as CSV (:func:`frame_to_csv_text`) atomically; return the path.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = write_csv(Path(tempfile.mkdtemp()) / "t.csv", pd.DataFrame({"x": [0.5]}))
+    >>> path.read_text()
+    'x\\n0.5\\n'
+    """
     return atomic_write_text(path, frame_to_csv_text(frame))

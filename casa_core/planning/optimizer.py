@@ -46,6 +46,7 @@ import numpy as np
 import torch
 
 from casa_core._checks import require_positive
+from casa_core.defaults import DT, HORIZON, ROT_SPEED, SPEED
 
 #: Cost of states: takes a tensor ``(B, n, 4)`` and returns per-state costs ``(B, n)``.
 StateCost = Callable[[torch.Tensor], torch.Tensor]
@@ -84,10 +85,10 @@ class PlannerConfig:
         Stop when no normalised step moves more than this in one iteration.
     """
 
-    horizon: float = 15.0
-    dt: float = 0.5
-    speed: float = 0.05
-    rot_speed: float = 0.5
+    horizon: float = HORIZON
+    dt: float = DT
+    speed: float = SPEED
+    rot_speed: float = ROT_SPEED
     limit: str = "axis"
     iterations: int = 400
     warm_iterations: int = 60

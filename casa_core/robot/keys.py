@@ -14,6 +14,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from casa_core.defaults import ROT_SPEED, SPEED
 from casa_core.vocabulary import KEYS
 
 #: The ``(plus, minus)`` key of each axis of ``[x, y, z, rot]``, in the keys' order.
@@ -29,9 +30,6 @@ KEY_DIRECTIONS = {
     "rot+": (0, 0, 0, 1),
     "rot-": (0, 0, 0, -1),
 }
-
-SPEED = 0.05
-ROT_SPEED = 0.5
 
 
 def check_keys(keys: Iterable[str]) -> frozenset[str]:

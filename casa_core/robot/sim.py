@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
+from casa_core.defaults import TICK
 from casa_core.robot import kinematics as kin
 from casa_core.robot.scene import SceneBodies, build_scene
 from casa_core.scene import Scene
@@ -63,7 +64,7 @@ class ControllerSettings:
         Largest torque (N m) a velocity motor may apply.
     """
 
-    dt: float = 0.05
+    dt: float = TICK
     substeps: int = 2
     damping: float = 0.02
     position_gain: float = 5.0

@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from casa_core.assistant import Assistant
+from casa_core.defaults import DT
 from casa_core.intents import GoalIntent, Intent
 from casa_core.io import write_trial
 from casa_core.robot.keys import check_keys, format_keys, keys_to_action
@@ -37,8 +38,6 @@ from casa_core.vocabulary import METHODS, TASK_PHASES
 METHOD_ARBITRATION = {"NA": "none", "PBA": "distance", "CASA": "confidence", "BELIEF": "belief"}
 #: The goals the robot knows from the start (paper, Sec. IV).
 KNOWN_GOALS = ("green", "purple")
-#: Seconds between inference steps: twice per second (paper, Sec. IV-A).
-INFERENCE_PERIOD = 0.5
 
 
 @dataclass
@@ -157,16 +156,16 @@ def run_trial(
     phase = default_phase(task) if phase is None else phase
     intents = known_goal_intents(scene) if intents is None else list(intents)
     teleop = scene.teleop
-    ticks_per_inference = int(round(INFERENCE_PERIOD / teleop.dt))
-    if ticks_per_inference < 1 or abs(ticks_per_inference * teleop.dt - INFERENCE_PERIOD) > 1e-9:
+    ticks_per_inference = int(round(DT / teleop.dt))
+    if ticks_per_inference < 1 or abs(ticks_per_inference * teleop.dt - DT) > 1e-9:
         raise ValueError(
             f"scene: teleop.dt = {teleop.dt} s must divide the inference period "
-            f"{INFERENCE_PERIOD} s into whole ticks"
+            f"{DT} s into whole ticks"
         )
     assistant = Assistant(
         intents,
         arbitration=METHOD_ARBITRATION[method],
-        dt=INFERENCE_PERIOD,
+        dt=DT,
         speed=teleop.speed,
         rot_speed=teleop.rot_speed,
         tick=teleop.dt,

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from itertools import permutations
 from typing import TYPE_CHECKING
 
+from casa_core.defaults import DEMONSTRATIONS
 from casa_core.vocabulary import METHODS, UNKNOWN_TASKS
 
 if TYPE_CHECKING:
@@ -60,7 +61,7 @@ def before_learning(participant_index: int) -> list[TrialSpec]:
     return trials
 
 
-def demonstrations(task: str, n: int = 5) -> list[TrialSpec]:
+def demonstrations(task: str, n: int = DEMONSTRATIONS) -> list[TrialSpec]:
     """The ``n`` demonstrations of an unknown task, by direct teleoperation."""
     return [TrialSpec(task, "NA", "demonstration", repeat) for repeat in range(n)]
 

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from casa_core import metrics
+from casa_core.defaults import DEMONSTRATIONS
 from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_trial, write_surveys
 from casa_core.scene import Scene
 from casa_core.study import likert, protocol
@@ -270,7 +271,7 @@ def run_case_study(
     settings = {
         "seed": case_study["seed"],
         "max_duration": case_study["max_duration"],
-        "demonstrations": 5,
+        "demonstrations": DEMONSTRATIONS,
         "demonstrations_when": "always",
         "epsilon": case_study["epsilon"],
         **assistant_options(case_study),

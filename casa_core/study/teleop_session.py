@@ -13,7 +13,7 @@ from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 
-from casa_core.assistant import EPSILON
+from casa_core.defaults import DEMONSTRATIONS, EPSILON
 from casa_core.io import SCHEMA, check_meta, read_trial
 from casa_core.robot.sim import ArmSimulation
 from casa_core.robot.teleop import KeyboardKeys, Window
@@ -128,7 +128,7 @@ def teleop_session(
     participant: str,
     out: Path | str,
     *,
-    n_demonstrations: int = 5,
+    n_demonstrations: int = DEMONSTRATIONS,
     epsilon: float = EPSILON,
     make_key_source: Callable[[], KeySource] | None = None,
     **options,
