@@ -90,9 +90,12 @@ def posterior(log_likelihoods):
 
 def _posterior(logs: np.ndarray) -> np.ndarray:
     """:func:`posterior` on checked input (the assistant's per-step path)."""
-    if (logs == np.inf).any():
-        certain = (logs == np.inf).astype(float)
-        return certain / certain.sum(axis=-1, keepdims=True)
+    certain = logs == np.inf
+    if certain.any():
+        # Rows with an intent at +inf share their mass among those; the others as below.
+        has_certain = certain.any(axis=-1, keepdims=True)
+        shared = certain / np.maximum(certain.sum(axis=-1, keepdims=True), 1)
+        return np.where(has_certain, shared, _posterior(np.where(has_certain, 0.0, logs)))
     top = logs.max(axis=-1, keepdims=True)
     top = np.where(np.isfinite(top), top, 0.0)
     weights = np.exp(logs - top)

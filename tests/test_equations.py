@@ -143,6 +143,15 @@ def test_posterior_infinite_cases():
         posterior([0.0, np.nan])
 
 
+def test_posterior_rows_are_independent():
+    # A row with an intent at +inf must not change the other rows of a batch:
+    # each row is the posterior of its own prefix (brute force for the finite one).
+    batch = posterior([[np.inf, 0.0], [0.0, np.log(3.0)], [-np.inf, -np.inf]])
+    np.testing.assert_array_equal(batch[0], [1.0, 0.0])
+    np.testing.assert_allclose(batch[1], [0.25, 0.75], rtol=1e-12)
+    np.testing.assert_array_equal(batch[2], [0.5, 0.5])
+
+
 def test_alpha_confidence():
     np.testing.assert_array_equal(
         alpha_confidence([0.0, 0.5, 1.0, 4.0, np.inf]), [1, 1, 1, 0.25, 0]
