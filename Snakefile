@@ -25,8 +25,10 @@ include: "workflow/rules/datasets.smk"
 include: "workflow/rules/stats.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/study.smk"
+include: "workflow/rules/report.smk"
 
 
+# The report's landing page: results, figures, statistics, tables, then the workflow.
 report: "workflow/report/workflow.rst"
 
 
@@ -34,3 +36,4 @@ rule all:
     default_target: True
     input:
         all_outputs(),
+        report_pages(),

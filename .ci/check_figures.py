@@ -42,7 +42,7 @@ simulated = PROCESSED / "simulated"
 check_panels(
     "objective",
     figures.objective_figure(read(simulated / "trials.csv"), read(simulated / "stats.csv")),
-    3,
+    12,  # 4 rows (error, efficiency, effort, success) x 3 tasks
 )
 check_panels("likert", figures.likert_figure(read(simulated / "likert.csv")), 3)
 check_panels(

@@ -50,6 +50,10 @@ TRIAL_COLUMNS = (
     "relative_effort_ticks",
     "ticks",
     "trial",
+    # Whether the trial ran to its time limit (empty when its log does not say the
+    # limit) and whether it ended where the task intends (casa_core.metrics).
+    "timed_out",
+    "success",
 )
 STEP_COLUMNS = (
     "participant",
@@ -195,7 +199,9 @@ def _trials_and_steps(
                 "dataset": dataset,
                 **condition,
                 "source": meta["source"],
-                **metrics.trial_metrics(frame, intended[task], dt=dt),
+                **metrics.trial_metrics(
+                    frame, intended[task], dt=dt, max_duration=meta.get("max_duration")
+                ),
                 "trial": trial,
             }
         )

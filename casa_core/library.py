@@ -344,6 +344,30 @@ def _build_intent(payload: dict) -> NeuralIntent:
     )
 
 
+def find_libraries(folder: Path | str) -> list[Path]:
+    """The libraries at or below ``folder``: itself if it holds intent files, else those below.
+
+    A folder of participant folders, each a library, lists each of them (sorted); a
+    folder without intent files anywhere below gives ``[]``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> root = Path(tempfile.mkdtemp())
+    >>> for part in ("p2/unknown_goal", "p1/unknown_goal"):
+    ...     (root / part).mkdir(parents=True)
+    ...     _ = (root / part / f"red{SUFFIX}").write_text("{}")
+    >>> [path.relative_to(root).as_posix() for path in find_libraries(root)]
+    ['p1/unknown_goal', 'p2/unknown_goal']
+    >>> find_libraries(root / "p1" / "unknown_goal") == [root / "p1" / "unknown_goal"]
+    True
+    """
+    folder = Path(folder)
+    if any(folder.glob(f"*{SUFFIX}")):
+        return [folder]
+    return sorted({path.parent for path in folder.rglob(f"*{SUFFIX}")})
+
+
 def scan_library(library: Path | str) -> tuple[list[LibraryEntry], list[LibraryError]]:
     """Every ``*.intent.json`` in ``library`` (sorted): the good ones and the problems.
 

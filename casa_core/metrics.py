@@ -26,6 +26,19 @@ For a trial logged at ticks ``t_0 < ... < t_{n-1}`` with end-effector positions
 - **relative_effort**: ``effort`` divided by the same participant's ``effort`` in
   the NA condition of the same task (:func:`relative_effort`).
 - **duration** (s): ``t_{n-1}``, the seconds from the trial's start to its last tick.
+- **timed_out**: the trial ran until its time limit ``max_duration`` (the metadata
+  key of that name) instead of ending when the operator was done: true when
+  ``max_duration - t_{n-1} < dt``, i.e. its last tick is within one control tick of
+  the limit (:func:`timed_out`). Unknown (None) when the log does not say its limit.
+- **success**: the trial ends where the task intends: the last position ``p_{n-1}``
+  is within :data:`SUCCESS_RADIUS` (0.05 m) of the end of the intended trajectory
+  and, for a task whose intended trajectory ends with the cup tilted (the pour,
+  Unknown Skill), the last rotation ``r_{n-1}`` is within
+  :data:`POUR_TILT_TOLERANCE` (0.2 rad) of the intended final tilt
+  (:func:`task_success`). Only the end counts, not how or how fast it was
+  reached: a trial that ran out of time succeeds when its pose at the limit meets
+  these bounds (an operator still fine-tuning the tilt), and fails otherwise (an
+  arm held at another goal).
 
 Both error sums and the efficiency cost grow with the number of ticks, as the
 paper's sums do; compare them only across trials logged at the same tick rate.
@@ -55,6 +68,18 @@ REFERENCE_CONDITION = REFERENCE_METHOD = "NA"
 REFERENCE_PHASES = tuple(
     phase for phase in PHASES if condition_of(REFERENCE_METHOD, phase) == REFERENCE_CONDITION
 )
+
+
+#: How close (m) the last position must be to the intended trajectory's end for success:
+#: 5 cm, the radius of the pouring target drawn in the scene, well inside the bowl's 7 cm
+#: rim (a pour from there lands in the bowl), and far below the 22 cm between the two
+#: nearest ends of different tasks (the green goal and the pouring position), so a
+#: trial that stops at another task's end never succeeds.
+SUCCESS_RADIUS = 0.05
+#: How close (rad) the pour's last rotation must be to the intended tilt (scene
+#: ``pouring.tilt``, 1.8 rad = 103 deg) for success: 0.2 rad keeps the cup past
+#: horizontal (at least 1.6 rad = 92 deg), where it pours out.
+POUR_TILT_TOLERANCE = 0.2
 
 
 def trajectory_error(
@@ -179,7 +204,83 @@ def key_ticks(keys: Sequence[str]) -> int:
     return sum(len(held) for held in held_keys(keys))
 
 
-def trial_metrics(frame: pd.DataFrame, intended: np.ndarray, *, dt: float) -> dict[str, float]:
+def timed_out(duration: float, max_duration: float | None, *, dt: float) -> bool | None:
+    """Whether a trial ran to its time limit: its last tick within one tick ``dt`` of it.
+
+    Parameters
+    ----------
+    duration : float
+        The trial's last tick ``t_{n-1}`` (s).
+    max_duration : float or None
+        The time limit the trial ran under (s), the metadata's ``max_duration``.
+    dt : float
+        The control tick (s).
+
+    Returns
+    -------
+    bool or None
+        None when ``max_duration`` is None (the log does not say its limit).
+
+    Examples
+    --------
+    A 40 s limit at 20 Hz: the last tick at 40 s ran out; one tick earlier, the
+    operator was done first.
+
+    >>> timed_out(40.0, 40.0, dt=0.05), timed_out(39.95, 40.0, dt=0.05)
+    (True, False)
+    >>> timed_out(12.0, None, dt=0.05) is None
+    True
+    """
+    if max_duration is None:
+        return None
+    # The small tolerance keeps a last tick exactly one tick before the limit out.
+    return bool(max_duration - duration < dt - 1e-9)
+
+
+def task_success(executed: np.ndarray, intended: np.ndarray) -> bool:
+    """Whether a trial ends where its task intends (module docstring, **success**).
+
+    Parameters
+    ----------
+    executed, intended : ndarray, shape (n, 5) and (m, 5)
+        Rows ``[t, x, y, z, rot]``; only the last row of each counts.
+
+    Returns
+    -------
+    bool
+        The last position within :data:`SUCCESS_RADIUS` of the intended end and, when
+        the intended trajectory ends with a rotation other than its first (the pour),
+        the last rotation within :data:`POUR_TILT_TOLERANCE` of the intended one.
+
+    Examples
+    --------
+    A reference that ends at x = 0.3 m with the cup tilted to 1.8 rad:
+
+    >>> intended = np.array([[0.0, 0, 0, 0, 0], [6.0, 0.3, 0, 0, 1.8]])
+    >>> task_success(np.array([[9.0, 0.26, 0, 0, 1.65]]), intended)  # 4 cm, 0.15 rad off
+    True
+    >>> task_success(np.array([[9.0, 0.3, 0, 0, 1.5]]), intended)  # tilt 0.3 rad short
+    False
+    >>> task_success(np.array([[9.0, 0.24, 0, 0, 1.8]]), intended)  # 6 cm away
+    False
+    """
+    end = np.asarray(executed, dtype=float)[-1, 1:]
+    reference = np.asarray(intended, dtype=float)
+    target = reference[-1, 1:]
+    # Tiny tolerances: a trial ending on the boundary counts, despite rounding.
+    close = bool(np.linalg.norm(end[:3] - target[:3]) <= SUCCESS_RADIUS + 1e-12)
+    if reference[-1, 4] == reference[0, 4]:
+        return close
+    return close and bool(abs(end[3] - target[3]) <= POUR_TILT_TOLERANCE + 1e-12)
+
+
+def trial_metrics(
+    frame: pd.DataFrame,
+    intended: np.ndarray,
+    *,
+    dt: float,
+    max_duration: float | None = None,
+) -> dict[str, float | int | bool | None]:
     """Every per-trial metric of one trial log (module docstring for the formulas).
 
     Parameters
@@ -190,12 +291,15 @@ def trial_metrics(frame: pd.DataFrame, intended: np.ndarray, *, dt: float) -> di
         The task's intended trajectory ``[t, x, y, z, rot]``.
     dt : float
         The control tick (s), the step at which error is summed.
+    max_duration : float, optional
+        The trial's time limit (s), the metadata's ``max_duration``; without it
+        ``timed_out`` is None.
 
     Returns
     -------
     dict
         ``error, error_rot, efficiency, efficiency_rot, effort, effort_ticks,
-        duration, ticks``.
+        duration, ticks, timed_out, success``.
 
     Examples
     --------
@@ -204,6 +308,8 @@ def trial_metrics(frame: pd.DataFrame, intended: np.ndarray, *, dt: float) -> di
     >>> result = trial_metrics(frame, frame[["t", "x", "y", "z", "rot"]].to_numpy(), dt=0.5)
     >>> result["error"], result["effort"], result["effort_ticks"], result["duration"]
     (0.0, 1, 2, 1.0)
+    >>> result["success"], result["timed_out"]
+    (True, None)
     """
     executed = frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float)
     error, error_rot = trajectory_error(executed, intended, dt=dt)
@@ -217,6 +323,8 @@ def trial_metrics(frame: pd.DataFrame, intended: np.ndarray, *, dt: float) -> di
         "effort_ticks": key_ticks(frame["keys"]),
         "duration": float(t[-1]),
         "ticks": len(t),
+        "timed_out": timed_out(float(t[-1]), max_duration, dt=dt),
+        "success": task_success(executed, intended),
     }
 
 

@@ -60,3 +60,40 @@ def test_time_assistance_step_and_table(scene):
 def test_trial_realtime_factor_runs_the_unknown_goal_trial(scene):
     cpu, wall = bench.trial_realtime_factor(scene, duration=1.0, repeats=1)
     assert cpu > 0 and wall > 0
+
+
+def test_intent_sets_are_timed_together_and_say_whether_the_robot_assists(scene):
+    # The reference heads to red: with green and purple only, neither is confident and the
+    # robot leaves the user alone (alpha = 1); with red known it assists.
+    rng = np.random.default_rng(0)
+    sets = [bench.goal_intents(scene, n, rng) for n in (2, 3)]
+    rows = bench.time_assistance_steps(sets, bench.bench_trajectory(scene), rng, repeats=4)
+    assert [row["assisting"] for row in rows] == [False, True]
+    assert all(row["step_us"] > 0 for row in rows)
+
+
+def scaling_results(goal3, four):
+    return {
+        "step_us_goal3": goal3,
+        "step_us_neural1": None,
+        "scaling": [
+            {"n_intents": 2, "step_us": 80.0, "assisting": False},
+            {"n_intents": 4, "step_us": four, "assisting": True},
+            {"n_intents": 8, "step_us": four + 32.0, "assisting": True},
+            {"n_intents": 16, "step_us": four + 96.0, "assisting": True},
+        ],
+    }
+
+
+def test_table_marks_unassisted_rows_and_fits_without_them():
+    table = bench.format_table(scaling_results(110.0, 120.0))
+    assert "2 goal intents (us) *" in table and "alpha = 1" in table
+    # 120, 152, 216 at 4, 8, 16 lie on a line of 8 us per intent; with the 2-row (80 us)
+    # the fit would be steeper.
+    assert "8.0, 1.000" in table.split("linear fit")[1].splitlines()[0]
+    assert "took no less than 4" not in table
+
+
+def test_table_explains_three_goals_no_faster_than_four():
+    table = bench.format_table(scaling_results(131.0, 130.0))
+    assert "3 goal intents took no less than 4 (131.0 vs 130.0 us)" in table

@@ -10,7 +10,7 @@ import pytest
 from test_logs_synthetic import SCENE, write_dataset
 
 from casa_core import datasets, metrics, tasks
-from casa_core.io import find_files, read_trial
+from casa_core.io import check_meta, find_files, read_trial
 
 # The column contract with users (docs/data-contracts.md); extra columns may follow.
 TRIALS = [
@@ -59,8 +59,13 @@ def test_trials_rows_are_the_metrics_of_each_log(raw, tmp_path):
         frame, tasks.intended_trajectory("unknown_skill", SCENE), dt=0.05
     )
     row = trials.loc["p02/unknown_skill_PBA_before_learning"]
+    flags = {"timed_out", "success"}
     for key, value in expected.items():
-        assert row[key] == pytest.approx(value, rel=1e-12)
+        if key not in flags:
+            assert row[key] == pytest.approx(value, rel=1e-12)
+    # The synthetic logs do not say their time limit: timed_out stays empty.
+    assert expected["timed_out"] is None and pd.isna(row["timed_out"])
+    assert row["success"] == expected["success"]
     reference = trials.loc["p02/unknown_skill_NA_before_learning", "effort"]
     assert row["relative_effort"] == pytest.approx(expected["effort"] / reference)
 
@@ -139,3 +144,58 @@ def test_a_dataset_without_na_or_surveys_still_builds(tmp_path):
     assert tables.trials["relative_effort"].isna().all()  # no NA reference
     assert tables.trials["dataset"].tolist() == ["lab"]
     assert tables.likert.empty
+
+
+def test_trials_end_with_timed_out_and_success(raw, tmp_path):
+    datasets.process_dataset(raw, tmp_path, SCENE)
+    header = (tmp_path / "trials.csv").read_text().splitlines()[0].split(",")
+    assert header[-2:] == ["timed_out", "success"]
+    trials = datasets.read_table(tmp_path / "trials.csv")
+    assert trials["timed_out"].isna().all()  # no log says its limit
+    # Each row's success is task_success of its log against its task's intended end.
+    for row in trials.itertuples():
+        _, frame = read_trial(raw / row.trial)
+        executed = frame[["t", "x", "y", "z", "rot"]].to_numpy()
+        intended = tasks.intended_trajectory(row.task, SCENE)
+        assert row.success == metrics.task_success(executed, intended), row.trial
+
+
+def test_timed_out_comes_from_the_logged_limit(tmp_path):
+    methods = ("NA", "PBA", "CASA")
+    conditions = [("known_goal", method, "no_misspecification") for method in methods]
+    write_dataset(tmp_path / "ds", participants=("p01",), surveys=False, conditions=conditions)
+    # NA: a limit at its last tick (it ran out); PBA: a limit 10 s later (it did not);
+    # CASA: no limit logged (unknown, an empty cell).
+    for method, extra in (("NA", 0.0), ("PBA", 10.0)):
+        stem = tmp_path / "ds" / "p01" / f"known_goal_{method}_no_misspecification"
+        _, frame = read_trial(stem)
+        path = stem.with_suffix(".json")
+        meta = json.loads(path.read_text())
+        path.write_text(json.dumps({**meta, "max_duration": frame["t"].iloc[-1] + extra}))
+    datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE)
+    trials = datasets.read_table(tmp_path / "out" / "trials.csv").set_index("method")
+    assert trials.loc["NA", "timed_out"] is True and trials.loc["PBA", "timed_out"] is False
+    assert pd.isna(trials.loc["CASA", "timed_out"])
+
+
+META = {
+    "schema": "casa-trial/1",
+    "participant": "p01",
+    "task": "known_goal",
+    "method": "NA",
+    "phase": "no_misspecification",
+    "source": "human",
+}
+
+
+@pytest.mark.parametrize("value", [40, 40.0, 0.5])
+def test_max_duration_is_an_optional_positive_number(value):
+    assert check_meta(META, "t.json") == []
+    assert check_meta({**META, "max_duration": value}, "t.json") == []
+
+
+@pytest.mark.parametrize("value", [0, -5.0, "40", True, None, float("inf"), float("nan")])
+def test_max_duration_must_be_a_positive_finite_number(value):
+    problems = check_meta({**META, "max_duration": value}, "t.json")
+    assert [(p.where, p.rule) for p in problems] == [("key 'max_duration'", "positive-number")]
+    assert "positive number of seconds" in problems[0].message

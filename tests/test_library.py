@@ -232,3 +232,31 @@ def test_weights_survive_exactly(tmp_path):
     entry = library.load_intent(save(tmp_path, intent))
     for a, b in zip(intent.network.parameters(), entry.intent.network.parameters(), strict=True):
         assert torch.equal(a, b)
+
+
+def test_cli_list_searches_the_participant_folders_below(tmp_path):
+    # The workflow's layout: intents/<participant>/<task>/<name>.intent.json, the same
+    # intent name in every participant's library.
+    for pid in ("p1", "p2"):
+        save(tmp_path / pid / "unknown_goal", make_intent("learned_red"))
+    listed = run_casa("library", "list", str(tmp_path))
+    assert listed.returncode == 0, listed.stderr
+    lines = listed.stdout.splitlines()
+    assert [line.split("\t")[0] for line in lines] == ["learned_red", "learned_red"]
+    assert [line.split("\t")[-1] for line in lines] == [
+        "library=p1/unknown_goal",
+        "library=p2/unknown_goal",
+    ]
+    # One library named directly lists as before, without the folder column.
+    direct = run_casa("library", "list", str(tmp_path / "p1" / "unknown_goal"))
+    assert direct.returncode == 0 and "library=" not in direct.stdout
+
+
+def test_cli_list_says_when_nothing_is_found_and_exits_1(tmp_path):
+    (tmp_path / "p1" / "unknown_goal").mkdir(parents=True)
+    listed = run_casa("library", "list", str(tmp_path))
+    assert listed.returncode == 1 and listed.stdout == ""
+    assert f"no *.intent.json file in {tmp_path} or below" in listed.stderr
+    missing = run_casa("library", "list", str(tmp_path / "nope"))
+    assert missing.returncode == 1 and "is not a folder" in missing.stderr
+    assert "Traceback" not in listed.stderr + missing.stderr

@@ -34,8 +34,16 @@ def test_bad_files_are_all_listed_and_exit_1(tmp_path, capsys):
     assert f"{tmp_path / 'ds' / 'p02' / 'lone.csv'}: [pair]" in err
     assert f"{lone}: key 'participant': [required-key] missing" in err
     assert f"{tmp_path / 'missing'}: [exists]" in err
-    # 2 x 11 trials, the lone one and the missing path; 3 of them bad.
-    assert "24 file(s) checked, 3 invalid" in err
+    assert f"casa validate: {tmp_path / 'missing'} does not exist" in err
+    # 2 x 11 trials and the lone one, 2 of them bad; the missing path is a problem, not a file.
+    assert "23 file(s) checked, 2 invalid," in err
+
+
+def test_a_path_that_does_not_exist_is_named_and_not_counted_as_a_file(tmp_path, capsys):
+    assert main(["validate", str(tmp_path / "nope")]) == 1
+    err = capsys.readouterr().err
+    assert f"casa validate: {tmp_path / 'nope'} does not exist" in err
+    assert "0 file(s) checked, 0 invalid, 1 problem(s)" in err
 
 
 def test_report_and_allow_invalid(tmp_path, capsys):
@@ -83,3 +91,25 @@ def test_process_names_the_bad_scene_key_without_a_traceback(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith(f"casa process: {scene}: teleop.") and "Traceback" not in err
     assert not (tmp_path / "out").exists()
+
+
+def help_examples(parser):
+    """The ``casa ...`` command lines of a parser's epilog (continuations joined)."""
+    text = (parser.epilog or "").replace("\\\n", " ")
+    lines = [line.strip() for line in text.splitlines()]
+    return [line.split("|")[0].split()[1:] for line in lines if line.startswith("casa ")]
+
+
+def test_every_command_and_subcommand_help_ends_with_an_example_that_parses():
+    from casa_core.cli import all_parsers, build_parser
+
+    parsers = all_parsers(build_parser())
+    # casa, its 11 commands and the subcommands of figure (5), library (1) and report (3).
+    assert len(parsers) >= 21
+    for parser in parsers:
+        assert "example" in parser.format_help().lower(), parser.prog
+        examples = help_examples(parser)
+        assert examples, parser.prog
+        for argv in examples:
+            if "--help" not in argv:
+                build_parser().parse_args(argv)  # argparse exits on a bad example

@@ -130,3 +130,85 @@ def test_trial_metrics_of_a_logged_trial():
     speed = SCENE.teleop.speed
     assert result["efficiency"] == pytest.approx((len(frame) - 1) * speed**2, rel=1e-9)
     assert result["ticks"] == len(frame)
+
+
+# --------------------------------------------------------------------------- time limit, success
+
+
+@pytest.mark.parametrize(
+    "duration, limit, expected",
+    [
+        (40.0, 40.0, True),  # the loop's last tick is at the limit
+        (39.97, 40.0, True),  # a logged clock: 0.03 s short, within one 0.05 s tick
+        (39.95, 40.0, False),  # one whole tick before the limit: the operator was done
+        (12.0, 40.0, False),
+        (12.0, None, None),  # the log does not say its limit
+    ],
+)
+def test_timed_out_means_the_last_tick_within_one_tick_of_the_limit(duration, limit, expected):
+    assert metrics.timed_out(duration, limit, dt=DT) is expected
+
+
+def _ending_at(task: str, offset=(0.0, 0.0, 0.0), rot: float | None = None) -> np.ndarray:
+    """A two-row trial from the start to the task's intended end moved by ``offset``."""
+    intended = tasks.intended_trajectory(task, SCENE)
+    end = intended[-1].copy()
+    end[0] += 5.0  # later than the reference: only where it ends counts
+    end[1:4] += offset
+    if rot is not None:
+        end[4] = rot
+    return np.array([intended[0], end])
+
+
+@pytest.mark.parametrize(
+    "task, offset, rot, expected",
+    [
+        # Goals: within SUCCESS_RADIUS = 0.05 m of the goal; the rotation is not judged.
+        ("known_goal", (0.0, 0.04, 0.0), None, True),
+        ("known_goal", (0.03, 0.04, 0.0), None, True),  # 3-4-5: exactly 0.05 m counts
+        ("known_goal", (0.0, 0.0, 0.06), None, False),
+        ("known_goal", (0.0, 0.0, 0.0), 1.0, True),
+        ("unknown_goal", (0.0, -0.051, 0.0), None, False),
+        # The pour (tilt 1.8 rad): also within POUR_TILT_TOLERANCE = 0.2 rad of the tilt.
+        ("unknown_skill", (0.0, 0.0, 0.0), 1.65, True),  # 0.15 rad short
+        ("unknown_skill", (0.0, 0.0, 0.0), 1.55, False),  # 0.25 rad short
+        ("unknown_skill", (0.0, 0.0, 0.0), 0.0, False),  # carried there, never poured
+        ("unknown_skill", (0.0, 0.06, 0.0), 1.8, False),  # poured 6 cm off
+    ],
+)
+def test_success_is_ending_at_the_intended_end(task, offset, rot, expected):
+    intended = tasks.intended_trajectory(task, SCENE)
+    assert metrics.task_success(_ending_at(task, offset, rot), intended) is expected
+
+
+def test_success_radius_and_tilt_tolerance():
+    # The documented values (docs/data-contracts.md): 5 cm and 0.2 rad.
+    assert metrics.SUCCESS_RADIUS == 0.05 and metrics.POUR_TILT_TOLERANCE == 0.2
+    # The pour's tilt stays past horizontal (pi / 2) at the tolerance's edge.
+    assert SCENE.pouring.tilt - metrics.POUR_TILT_TOLERANCE > np.pi / 2
+
+
+def test_trial_metrics_of_a_trial_that_ran_out_of_time():
+    # Standing still at the start for 40 s at 20 Hz (801 ticks) under a 40 s limit: it
+    # ran out of time and failed (0.27 m from the green goal).
+    t = np.arange(801) * DT
+    start = SCENE.start_state
+    frame = pd.DataFrame({"t": t, "x": start[0], "y": start[1], "z": start[2], "rot": 0.0})
+    frame["keys"] = ""
+    intended = tasks.intended_trajectory("known_goal", SCENE)
+    result = metrics.trial_metrics(frame, intended, dt=DT, max_duration=40.0)
+    assert result["timed_out"] is True and result["success"] is False
+    assert metrics.trial_metrics(frame, intended, dt=DT)["timed_out"] is None
+    assert metrics.trial_metrics(frame, intended, dt=DT, max_duration=60.0)["timed_out"] is False
+
+
+def test_success_radius_is_far_below_the_distance_between_task_ends():
+    # docs/data-contracts.md: the nearest two ends of different tasks are 22 cm apart
+    # (green goal and pouring position), so stopping at another task's end never succeeds.
+    ends = {
+        task: tasks.intended_trajectory(task, SCENE)[-1, 1:4]
+        for task in ("known_goal", "unknown_goal", "unknown_skill")
+    }
+    gaps = [np.linalg.norm(ends[a] - ends[b]) for a in ends for b in ends if a < b]
+    assert min(gaps) == pytest.approx(0.22, abs=0.005)
+    assert min(gaps) > 4 * metrics.SUCCESS_RADIUS

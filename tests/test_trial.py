@@ -47,6 +47,7 @@ def test_scripted_trial_writes_a_valid_log(task, method, scene, tmp_path):
     assert meta["task"] == task and meta["method"] == method
     assert meta["phase"] == default_phase(task)
     assert meta["intents"] == ["green", "purple"] and meta["seed"] == 3
+    assert meta["max_duration"] == 20.0  # the limit, so trials.csv can tell who ran out
     expected = ["t", "x", "y", "z", "rot", "keys", "alpha"] + [f"q{i}" for i in range(1, 8)]
     expected += ["beta:green", "beta:purple", "belief:green", "belief:purple"]
     assert list(frame.columns) == expected

@@ -13,19 +13,56 @@ import argparse
 import sys
 
 from casa_core import __version__
-from casa_core.cli import data, figure, learning, robot, study
+from casa_core.cli import data, figure, learning, report, robot, study
+from casa_core.cli._options import ExampleFormatter, example
+
+#: Examples of the commands whose module gives none, by their ``prog``.
+EXAMPLES = {
+    "casa figure": "casa figure objective --trials data/processed/simulated/trials.csv "
+    "--out figures/simulated/objective",
+    "casa figure objective": "casa figure objective --trials data/processed/simulated/trials.csv "
+    "--stats data/processed/simulated/stats.csv --out figures/simulated/objective",
+    "casa figure likert": "casa figure likert --likert data/processed/simulated/likert.csv "
+    "--out figures/simulated/likert",
+    "casa figure arbitration": "casa figure arbitration "
+    "--arbitration data/processed/case_study/arbitration.csv --out figures/arbitration",
+    "casa figure case_study": "casa figure case_study --steps data/processed/case_study/steps.csv "
+    "--epsilon 1.0 --out figures/case_study",
+    "casa figure scene": "casa figure scene --out figures/scene",
+    "casa report summary": "casa report summary --stats data/processed/simulated/stats.csv "
+    "--dataset simulated --out-md summary.md --out-html summary.html",
+    "casa report markdown": "casa report markdown data/processed/simulated/stats.md "
+    "--out stats.html",
+    "casa report table": "casa report table data/processed/simulated/trials.csv --out trials.html",
+}
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="casa",
-        description="Confidence-Aware Shared Autonomy: simulation, study and analysis tools.",
+        description="Confidence-Aware Shared Autonomy: simulation, study and analysis tools. "
+        "Each command's --help ends with an example.",
+        **example("casa validate data/raw/mine", "casa teleop --help"),
     )
     parser.add_argument("--version", action="version", version=f"casa {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (data, robot, figure, learning, study):
+    for module in (data, robot, figure, learning, study, report):
         module.register(commands)
+    for command in all_parsers(parser)[1:]:
+        if command.epilog is None and command.prog in EXAMPLES:
+            command.epilog = example(EXAMPLES[command.prog])["epilog"]
+            command.formatter_class = ExampleFormatter
     return parser
+
+
+def all_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """``parser`` and every command and subcommand below it, depth first."""
+    found = [parser]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in dict.fromkeys(action.choices.values()):
+                found += all_parsers(sub)
+    return found
 
 
 def main(argv: list[str] | None = None) -> int:

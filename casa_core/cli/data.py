@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from casa_core.cli._options import example
+
 
 def register(commands) -> None:
     """Add this module's commands to the ``casa`` subcommands."""
@@ -18,6 +20,7 @@ def _add_validate(commands) -> None:
         help="check trial logs and surveys against the casa-trial/1 contract",
         description="Check files and folders (recursively) against casa-trial/1; print every "
         "problem with file, row or key, and rule; exit 1 if any (0 with --allow-invalid).",
+        **example("casa validate data/raw/mine --report data/processed/mine/validation.csv"),
     )
     command.add_argument("paths", nargs="+", metavar="PATH", help="a log file or a folder")
     command.add_argument("--report", metavar="CSV", help="also write validation.csv here")
@@ -42,10 +45,15 @@ def _validate(args) -> int:
     problems = [problem for check in checks for problem in check.problems]
     for problem in problems:
         print(problem, file=sys.stderr)
+    # A path that does not exist, or a folder without logs, is a problem but not a file.
+    files = [check for check in checks if check.kind not in ("missing", "folder")]
     verdict = "excluded" if args.allow_invalid else "invalid"
-    bad_files = sum(not check.ok for check in checks)
+    bad_files = sum(not check.ok for check in files)
+    for check in checks:
+        if check.kind == "missing":
+            print(f"casa validate: {check.file} does not exist", file=sys.stderr)
     print(
-        f"casa validate: {len(checks)} file(s) checked, {bad_files} {verdict}, "
+        f"casa validate: {len(files)} file(s) checked, {bad_files} {verdict}, "
         f"{len(problems)} problem(s)",
         file=sys.stderr,
     )
@@ -56,6 +64,9 @@ def _add_process(commands) -> None:
     command = commands.add_parser(
         "process",
         help="turn one raw dataset folder into trials.csv, steps.csv and likert.csv",
+        description="Read the trial logs and surveys below RAW_DIR and write trials.csv, "
+        "steps.csv and likert.csv into --out; exit 1 if a file is bad (see casa validate).",
+        **example("casa process data/raw/mine --out data/processed/mine --scene config/scene.yaml"),
     )
     command.add_argument("raw", metavar="RAW_DIR", help="the dataset folder, e.g. data/raw/mine")
     command.add_argument("--out", required=True, metavar="DIR", help="folder of the tables")
@@ -94,6 +105,13 @@ def _add_stats(commands) -> None:
     command = commands.add_parser(
         "stats",
         help="the study's statistics (H1-H4): stats.csv and an APA-style Markdown report",
+        description="Run the study's analyses on trials.csv (and likert.csv) and write "
+        "stats.csv and its APA-style rendering.",
+        **example(
+            "casa stats --trials data/processed/mine/trials.csv "
+            "--likert data/processed/mine/likert.csv \\",
+            "    --out-csv data/processed/mine/stats.csv --out-md data/processed/mine/stats.md",
+        ),
     )
     command.add_argument("--trials", required=True, metavar="CSV", help="trials.csv")
     command.add_argument("--likert", metavar="CSV", help="likert.csv (optional)")

@@ -24,6 +24,9 @@ def _add_figure(commands) -> None:
     objective.add_argument("--stats", metavar="CSV", help="stats.csv (Tukey brackets)")
     likert = figures.add_parser("likert", help="Likert scores per task and question")
     likert.add_argument("--likert", required=True, metavar="CSV", help="likert.csv")
+    likert.add_argument(
+        "--stats", metavar="CSV", help="stats.csv (Friedman and Holm-corrected Wilcoxon marks)"
+    )
     arbitration = figures.add_parser("arbitration", help="belief, confidence and alpha")
     arbitration.add_argument("--arbitration", required=True, metavar="CSV")
     case_study = figures.add_parser("case_study", help="confidence and alpha per task")
@@ -47,10 +50,12 @@ def _figure(args) -> int:
         if args.figure == "scene":
             # Figures know no robots: the robot package renders the image the figure shows.
             from casa_core.figures.scene import TASK_PATHS
-            from casa_core.robot.render import render_scene
+            from casa_core.robot.render import render_scene, scene_landmarks
             from casa_core.scene import load_scene
 
-            inputs["image"] = render_scene(load_scene(args.scene), TASK_PATHS)
+            scene = load_scene(args.scene)
+            inputs["image"] = render_scene(scene, TASK_PATHS)
+            inputs["landmarks"] = scene_landmarks(scene)
         written = build_figure(args.figure, args.out, **inputs)
     except (OSError, ValueError) as error:
         print(f"casa figure {args.figure}: {error}", file=sys.stderr)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from casa_core import vocabulary
-from casa_core.cli._options import scene_option
+from casa_core.cli._options import example, scene_option
 
 
 def register(commands) -> None:
@@ -20,6 +20,10 @@ def _add_learn(commands) -> None:
         help="learn a new intent from demonstration logs (deep MaxEnt IRL) into a library",
         description="Read the demonstration logs (casa-trial/1) below --demos, learn intent "
         "NAME by deep maximum-entropy IRL and write NAME.intent.json into the library folder.",
+        **example(
+            "casa learn --demos data/raw/mine/p01 --task unknown_goal --name learned_red "
+            "--library intents/p01"
+        ),
     )
     command.add_argument("--demos", required=True, metavar="DIR", help="folder of demo logs")
     command.add_argument("--name", required=True, help="name of the new intent")
@@ -77,24 +81,49 @@ def _learn(args) -> int:
 
 
 def _add_library(commands) -> None:
-    command = commands.add_parser("library", help="inspect an intent library")
+    command = commands.add_parser(
+        "library",
+        help="inspect an intent library",
+        description="Inspect the learned intents (casa-intent files) of a library folder.",
+        **example("casa library list data/processed/simulated/intents"),
+    )
     actions = command.add_subparsers(dest="action", metavar="ACTION", required=True)
     listing = actions.add_parser(
         "list",
         help="one line per learned intent; damaged files are reported, not fatal",
-        description="Print one line per intent file; report each unusable file on stderr "
-        "with the rule it breaks; exit 1 if any file is unusable.",
+        description="Print one line per intent file of DIR; if DIR holds none, of every "
+        "library below it (e.g. one folder per participant), with its folder. Report each "
+        "unusable file on stderr with the rule it breaks; exit 1 if any file is unusable or "
+        "no intent file is found.",
+        **example("casa library list data/processed/simulated/intents"),
     )
     listing.add_argument("library", metavar="DIR")
     listing.set_defaults(func=_library_list)
 
 
 def _library_list(args) -> int:
+    from pathlib import Path
+
     from casa_core import library
 
-    entries, problems = library.scan_library(args.library)
-    for entry in entries:
-        print(entry.summary())
-    for problem in problems:
-        print(f"casa library: {problem}", file=sys.stderr)
-    return 1 if problems else 0
+    root = Path(args.library)
+    if not root.is_dir():
+        _, problems = library.scan_library(root)  # the one "is not a folder" problem
+        for problem in problems:
+            print(f"casa library: {problem}", file=sys.stderr)
+        return 1
+    folders = library.find_libraries(root)
+    if not folders:
+        print(f"casa library: no *{library.SUFFIX} file in {root} or below", file=sys.stderr)
+        return 1
+    n_problems = 0
+    for folder in folders:
+        # Each folder is one library: names are unique within it, not across participants.
+        entries, problems = library.scan_library(folder)
+        where = "" if folder == root else f"\tlibrary={folder.relative_to(root).as_posix()}"
+        for entry in entries:
+            print(entry.summary() + where)
+        for problem in problems:
+            print(f"casa library: {problem}", file=sys.stderr)
+        n_problems += len(problems)
+    return 1 if n_problems else 0

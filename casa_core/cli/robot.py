@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from casa_core import vocabulary
-from casa_core.cli._options import scene_option
+from casa_core.cli._options import example, scene_option
 
 
 def register(commands) -> None:
@@ -21,6 +21,9 @@ def _add_teleop(commands) -> None:
         description="Open a pybullet window with the task scene; after a countdown, drive the "
         "cup with the arrows (x, y), W/S (z) and A/D (pour); Enter ends the trial. The log "
         "goes to OUT/<task>_<phase>_<method>.{json,csv} (casa-trial/1).",
+        **example(
+            "casa teleop --task known_goal --method CASA --participant p01 --out data/raw/mine/p01"
+        ),
     )
     # The model's defaults, written once in the assistant.
     from casa_core.assistant import EVIDENCE
@@ -104,8 +107,11 @@ def _add_bench(commands) -> None:
     command = commands.add_parser(
         "bench",
         help="time the assistance step and a whole simulated trial",
-        description="Print a table; with --json, also one JSON object on the last line with "
-        "step_us_goal3, step_us_neural1, scaling and trial_realtime_factor (one CPU thread).",
+        description="Print a table and notes on reading it; with --json, also one JSON object "
+        "on the last line with step_us_goal3, step_us_neural1, scaling (n_intents, step_us, "
+        "assisting), trial_realtime_factor, trial_realtime_factor_wall and "
+        "trial_realtime_factor_reused_sim (CPU time of one thread; see casa_core.bench).",
+        **example("casa bench --json | tail -n 1 > bench.json"),
     )
     command.add_argument("--json", action="store_true", help="print the JSON line last")
     scene_option(command)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from casa_core import vocabulary
+from casa_core.cli._options import example
 
 if TYPE_CHECKING:
     from casa_core.scene import Scene
@@ -43,7 +44,14 @@ def _add_config_option(command) -> None:
 
 def _add_simulate(commands) -> None:
     command = commands.add_parser(
-        "simulate", help="simulate one participant of the study (one stage per call)"
+        "simulate",
+        help="simulate one participant of the study (one stage per call)",
+        description="One stage of one simulated participant, as the workflow runs it "
+        "(workflow/rules/study.smk); the workflow chains the stages.",
+        **example(
+            "casa simulate before --config config/config.yaml --participant 1 "
+            "--out data/raw/simulated/p1/before"
+        ),
     )
     command.add_argument(
         "stage",
@@ -115,7 +123,15 @@ def _simulate(args) -> int:
 
 def _add_case_study(commands) -> None:
     command = commands.add_parser(
-        "case-study", help="the expert case study and the arbitration comparison"
+        "case-study",
+        help="the expert case study and the arbitration comparison",
+        description="Run the simulated expert through the tasks (learning included) and the "
+        "three arbitrations along one trajectory; write steps.csv and arbitration.csv.",
+        **example(
+            "casa case-study --work data/interim/case_study "
+            "--steps data/processed/case_study/steps.csv \\",
+            "    --arbitration data/processed/case_study/arbitration.csv",
+        ),
     )
     _add_config_option(command)
     command.add_argument("--work", required=True, help="folder for the expert's logs and intents")

@@ -5,7 +5,7 @@ a :class:`matplotlib.figure.Figure`; :func:`save_figure` writes it as vector PDF
 200 dpi PNG, atomically. :mod:`.style` holds the colours, words and layout they share.
 
 - :func:`objective_figure` -- ``trials.csv`` (+ ``stats.csv``): error, efficiency, effort
-- :func:`likert_figure` -- ``likert.csv``: the three questions per task
+- :func:`likert_figure` -- ``likert.csv`` (+ ``stats.csv``): the three questions per task
 - :func:`arbitration_figure` -- ``arbitration.csv``: belief, confidence and three alphas
 - :func:`case_study_figure` -- ``steps.csv``: confidence and alpha over time per task
 - :func:`scene_figure` -- a rendering of the arm and scene

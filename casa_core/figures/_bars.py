@@ -15,14 +15,51 @@ from casa_core.figures import style
 from casa_core.vocabulary import CONDITIONS
 
 
-def participant_means(frame: pd.DataFrame, keys: Sequence[str], value: str) -> pd.DataFrame:
+def participant_means(
+    frame: pd.DataFrame, keys: Sequence[str], value: str, *, flags: Sequence[str] = ()
+) -> pd.DataFrame:
     """One row per participant and ``keys``: the mean of ``value`` over their trials.
 
     A participant who repeated a condition contributes one point, so each participant
-    weighs the same in the bar's mean and standard error.
+    weighs the same in the bar's mean and standard error. Each column of ``flags``
+    (1.0 true, 0.0 false, NaN unknown) becomes its maximum over those trials: a point is
+    flagged when any of its trials is.
+
+    Examples
+    --------
+    >>> trials = pd.DataFrame({"task": ["a", "a", "a"], "participant": ["p1", "p1", "p2"],
+    ...                        "error": [1.0, 3.0, 5.0], "timed_out": [0.0, 1.0, 0.0]})
+    >>> participant_means(trials, ["task"], "error", flags=["timed_out"]).values.tolist()
+    [['a', 'p1', 2.0, 1.0], ['a', 'p2', 5.0, 0.0]]
     """
     rows = frame.dropna(subset=[value])
-    return rows.groupby([*keys, "participant"], as_index=False, sort=False)[value].mean()
+    grouped = rows.groupby([*keys, "participant"], as_index=False, sort=False)
+    return grouped.agg(**{value: (value, "mean")}, **{flag: (flag, "max") for flag in flags})
+
+
+def wilson_interval(successes: int, trials: int, *, z: float = 1.959964) -> tuple[float, float]:
+    """The Wilson score interval of a proportion ``successes / trials`` (95 % by default).
+
+    ``(p + z^2/2n -+ z sqrt(p(1 - p)/n + z^2/4n^2)) / (1 + z^2/n)`` with ``p = k / n``
+    (Wilson, 1927): unlike the normal interval it stays inside [0, 1] and does not
+    shrink to a point at 0 or n successes.
+
+    Examples
+    --------
+    All 11 of 11: the lower end is ``n / (n + z^2)``.
+
+    >>> [round(v, 4) for v in wilson_interval(11, 11)]
+    [0.7412, 1.0]
+    >>> [round(v, 4) for v in wilson_interval(7, 11)]
+    [0.3538, 0.8483]
+    """
+    if trials <= 0:
+        return float("nan"), float("nan")
+    p = successes / trials
+    scale = 1 + z**2 / trials
+    centre = (p + z**2 / (2 * trials)) / scale
+    half = z / scale * np.sqrt(p * (1 - p) / trials + z**2 / (4 * trials**2))
+    return float(max(0.0, centre - half)), float(min(1.0, centre + half))
 
 
 def mean_se(values: np.ndarray) -> tuple[float, float]:
@@ -43,6 +80,9 @@ def draw_grouped_bars(
     value: str,
     width: float = 0.8,
     show_points: bool = True,
+    *,
+    marked: str | None = None,
+    marked_label: str = "marked",
 ) -> dict[tuple[str, str], tuple[float, float]]:
     """Draw one bar per (group, condition) with its standard error and participants' points.
 
@@ -62,6 +102,11 @@ def draw_grouped_bars(
         Width of a whole group on the x axis (a group slot is 1 wide).
     show_points : bool
         Draw every participant as a point over the bar.
+    marked : str, optional
+        Column of ``points`` (1.0 where true): those participants are drawn as black
+        crosses instead of open circles, with the legend label ``marked_label``.
+    marked_label : str
+        The marked points' label (:func:`condition_legend` shows it after the conditions).
 
     Returns
     -------
@@ -104,15 +149,31 @@ def draw_grouped_bars(
             # participant order so the same participant sits at the same place.
             order = np.argsort(rows["participant"].astype(str).to_numpy(), kind="stable")
             spread = np.linspace(-0.22, 0.22, len(values)) if len(values) > 1 else np.zeros(1)
+            xs, ys = x + spread * bar_width, values[order]
+            flagged = np.zeros(len(values), dtype=bool)
+            if marked is not None:
+                flagged = rows[marked].to_numpy(dtype=float)[order] == 1.0
             ax.scatter(
-                x + spread * bar_width,
-                values[order],
+                xs[~flagged],
+                ys[~flagged],
                 s=6,
                 facecolor="white",
                 edgecolor="0.1",
                 linewidth=0.5,
                 zorder=5,
             )
+            if flagged.any():
+                ax.scatter(
+                    xs[flagged],
+                    ys[flagged],
+                    s=16,
+                    marker="X",
+                    color="black",
+                    edgecolor="white",
+                    linewidth=0.3,
+                    zorder=5,
+                    label=marked_label,
+                )
             tops[(name, condition)] = (x, float(np.nanmax([mean + se, *values])))
     ax.set_xticks(range(len(groups)))
     ax.set_xlim(-0.5, len(groups) - 0.5)
@@ -159,18 +220,66 @@ def draw_brackets(ax, brackets: Sequence[tuple[float, float, float, str]]) -> No
         ax.set_ylim(low, top)
 
 
-def condition_legend(fig, axes) -> None:
-    """One legend above the panels with every condition drawn, in the style's order."""
+def condition_legend(fig, axes, *, extra: Sequence[str] = (), ncols: int | None = None) -> None:
+    """One legend above the panels with every condition drawn, in the style's order.
+
+    ``extra`` names other labelled artists (e.g. marked points) to list after the
+    conditions when drawn; ``ncols`` defaults to one row.
+    """
     handles = {}
     for ax in axes:
         for handle, name in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(name, handle)
-    order = [c for c in CONDITIONS if c in handles]
+    order = [c for c in (*CONDITIONS, *extra) if c in handles]
     fig.legend(
         [handles[c] for c in order],
         order,
         loc="outside upper center",
-        ncols=max(1, len(order)),
+        ncols=ncols or max(1, len(order)),
         handlelength=1.0,
         columnspacing=1.2,
     )
+
+
+def draw_proportions(ax, rows: pd.DataFrame, value: str, width: float = 0.8) -> None:
+    """One bar per condition: the proportion of ``rows`` whose ``value`` is true.
+
+    ``rows`` are trials of one group with a ``condition`` column and ``value`` as 1.0
+    (true) or 0.0 (false); NaN rows are left out. Each bar has its Wilson 95 % interval
+    (:func:`wilson_interval`) and the counts ``k/n`` above it; bars sit where
+    :func:`draw_grouped_bars` puts them, so the panels of one figure line up.
+    """
+    rows = rows.dropna(subset=[value])
+    present = [c for c in CONDITIONS if c in set(rows["condition"])]
+    bar_width = width / max(4, len(present))
+    offsets = (np.arange(len(present)) - (len(present) - 1) / 2) * bar_width
+    for offset, condition in zip(offsets, present, strict=True):
+        flags = rows.loc[rows["condition"] == condition, value].to_numpy(dtype=float)
+        k, n = int(flags.sum()), len(flags)
+        low, high = wilson_interval(k, n)
+        share = k / n
+        ax.bar(
+            offset,
+            share,
+            bar_width * 0.9,
+            color=style.METHOD_COLOURS[condition],
+            edgecolor="0.15",
+            linewidth=0.5,
+            label=condition,
+            zorder=2,
+        )
+        ax.errorbar(
+            offset,
+            share,
+            yerr=[[share - low], [high - share]],
+            color="0.1",
+            capsize=2,
+            elinewidth=0.9,
+            capthick=0.9,
+            zorder=4,
+        )
+        ax.text(offset, high + 0.03, f"{k}/{n}", ha="center", va="bottom", fontsize=6)
+    ax.set_xticks([0])
+    ax.set_xlim(-0.5, 0.5)
+    ax.set_ylim(0, 1.22)
+    ax.set_yticks([0, 0.25, 0.5, 0.75, 1.0])

@@ -79,6 +79,7 @@ def arbitration_figure(
     Figure
         Axes ``"belief"`` and ``"confidence"`` (left, shared time axis) and ``"alpha"``
         (right); the axes are also reachable by these names as ``fig.axes_by_name``.
+        The arbitrations' legend stands beside the alpha axes, clear of the curves.
     """
     per_intent, alphas = prepare_arbitration(arbitration)
     colours = style.intent_colours(per_intent["intent"].unique())
@@ -86,13 +87,14 @@ def arbitration_figure(
         fig = style.new_figure(7.0, 2.8)
         axes = fig.subplot_mosaic([["belief", "alpha"], ["confidence", "alpha"]], sharex=True)
         for intent, series in per_intent.groupby("intent", sort=True):
-            kwargs = {"color": colours[intent], "label": str(intent)}
+            kwargs = {"color": colours[intent], "label": style.display_name(str(intent))}
             axes["belief"].plot(series["t"], series["belief"], **kwargs)
             axes["confidence"].plot(series["t"], series["beta"], **kwargs)
         axes["belief"].set_ylabel("Belief $P(\\theta \\mid \\xi)$")
         axes["belief"].set_ylim(-0.03, 1.03)
         axes["belief"].tick_params(labelbottom=False)
-        axes["belief"].legend(title="known goal", loc="center right", title_fontsize=7.5)
+        # Mid-height on the right: the beliefs settle at 0 and 1 there.
+        axes["belief"].legend(loc="center right")
         axes["confidence"].set_ylabel("Confidence $\\hat\\beta_\\theta$")
         axes["confidence"].set_xlabel("Time (s)")
         # Room for the threshold when the confidences stay below it (misspecification).
@@ -114,12 +116,21 @@ def arbitration_figure(
         axes["alpha"].set_ylabel("Human's control authority $\\alpha$")
         axes["alpha"].set_xlabel("Time (s)")
         axes["alpha"].set_ylim(-0.03, 1.05)
-        axes["alpha"].legend(title="arbitration", loc="best", title_fontsize=7.5)
+        # Beside the axes, not on them: inside, "best" lands on the CASA curve.
+        axes["alpha"].legend(
+            title="arbitration",
+            loc="center left",
+            bbox_to_anchor=(1.02, 0.5),
+            title_fontsize=7.5,
+            alignment="left",
+        )
         caption = (title or "Arbitration methods along the optimal Unknown Goal trajectory") + "."
         caption += (
             " Left: belief and confidence in each known goal; right: the user's control"
             " authority under distance, belief and confidence arbitration."
         )
+        if epsilon is not None:
+            caption += f" Dotted: the misspecification threshold epsilon = {epsilon:g}."
         style.add_caption(fig, caption)
     fig.axes_by_name = axes
     return fig

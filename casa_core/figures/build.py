@@ -11,10 +11,10 @@ from casa_core.figures import style
 #: reads; for the scene, the rendered image (an array).
 INPUTS: dict[str, tuple[str, ...]] = {
     "objective": ("trials", "stats"),
-    "likert": ("likert",),
+    "likert": ("likert", "stats"),
     "arbitration": ("arbitration",),
     "case_study": ("steps",),
-    "scene": ("image",),
+    "scene": ("image", "landmarks"),
 }
 
 
@@ -30,9 +30,11 @@ def build_figure(name: str, out: str | Path, **inputs) -> list[Path]:
         the PNG (a rendering has no vector form).
     **inputs
         Paths of the input tables by the names in :data:`INPUTS` (``stats`` is optional
-        for ``objective``), plus the options ``epsilon`` (arbitration, case_study) and
-        ``participant`` (case_study). The scene's ``image`` is rendered by the caller
-        (:func:`casa_core.robot.render.render_scene`), since figures know no robots.
+        for ``objective`` and ``likert``), plus the options ``epsilon`` (arbitration,
+        case_study) and ``participant`` (case_study). The scene's ``image`` and
+        ``landmarks`` (optional) come from the caller
+        (:func:`casa_core.robot.render.render_scene` and
+        :func:`~casa_core.robot.render.scene_landmarks`), since figures know no robots.
 
     Returns
     -------
@@ -50,7 +52,10 @@ def build_figure(name: str, out: str | Path, **inputs) -> list[Path]:
             read_table(inputs["trials"]), read_table(stats) if stats else None
         )
     elif name == "likert":
-        fig = figures.likert_figure(read_table(inputs["likert"]))
+        stats = inputs.get("stats")
+        fig = figures.likert_figure(
+            read_table(inputs["likert"]), read_table(stats) if stats else None
+        )
     elif name == "arbitration":
         fig = figures.arbitration_figure(read_table(inputs["arbitration"]), epsilon=epsilon)
     elif name == "case_study":
@@ -58,5 +63,6 @@ def build_figure(name: str, out: str | Path, **inputs) -> list[Path]:
             read_table(inputs["steps"]), participant=inputs.get("participant"), epsilon=epsilon
         )
     else:
-        return style.save_figure(figures.scene_figure(inputs["image"]), out, formats=("png",))
+        fig = figures.scene_figure(inputs["image"], inputs.get("landmarks"))
+        return style.save_figure(fig, out, formats=("png",))
     return style.save_figure(fig, out)

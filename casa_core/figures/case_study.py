@@ -3,7 +3,9 @@
 One row per task. Left: the confidence ``beta_hat`` in each intent over time with the
 robot's intents before learning (for Known Goal, its only run). Middle: the same after
 learning, for the misspecified tasks. Right: the human's control authority ``alpha``
-over time under PBA and CASA (before and after learning).
+over time under PBA and CASA (before and after learning). The misspecification
+threshold ``epsilon``, when given, is a dotted line on the confidence panels. Intents
+and the participant are named by :func:`casa_core.figures.style.display_name`.
 """
 
 from __future__ import annotations
@@ -88,7 +90,8 @@ def case_study_figure(
     participant : str, optional
         Whose runs to draw (the case study has one expert); default: the first.
     epsilon : float, optional
-        The misspecification threshold, drawn on the confidence panels when given.
+        The misspecification threshold (``case_study.epsilon`` of the configuration):
+        a dotted line on the confidence panels, named in the legend and the caption.
     title : str, optional
         First words of the caption.
 
@@ -97,7 +100,9 @@ def case_study_figure(
     Figure
         A grid of axes, one row per task present and three columns (confidence before
         learning, confidence after learning, alpha); ``fig.axes_grid[task]`` maps each
-        task to its three axes. Panels without data carry a note.
+        task to its three axes. One legend above the panels names the intents (and the
+        threshold); each alpha panel has its own beside it. Panels without data carry a
+        note.
     """
     rows, participant = prepare_steps(steps, participant)
     tasks = [t for t in style.SHOWN_TASKS if t in set(rows["task"])]
@@ -147,15 +152,8 @@ def case_study_figure(
         for ax in grid[-1]:
             if ax.has_data():
                 ax.set_xlabel("Time (s)")
-        # "simulated participant expert": simulated data says so (steps may carry source).
-        sources = sorted(set(rows["source"].dropna().astype(str))) if "source" in rows else []
-        who = " ".join([" and ".join(sources), "participant"]).strip()
-        caption = f"{title or 'Case study'}, {who} {participant}."
-        caption += (
-            " Confidence in each intent the robot knows, before and after learning the new"
-            " intent, and the user's control authority under PBA and CASA."
-        )
-        style.add_caption(fig, caption)
+        _intent_legend(fig, grid[:, :2].ravel())
+        style.add_caption(fig, _caption(rows, participant, epsilon, title))
     fig.axes_grid = axes_grid
     return fig
 
@@ -169,12 +167,62 @@ def _confidence_panel(ax, run: pd.DataFrame, colours, epsilon, top: float) -> No
     )
     for intent in order:
         series = run[run["intent"].astype(str) == intent].sort_values("t")
-        ax.plot(series["t"], series["beta"], color=colours[str(intent)], label=str(intent))
+        ax.plot(
+            series["t"],
+            series["beta"],
+            color=colours[str(intent)],
+            label=style.display_name(str(intent)),
+        )
     if epsilon is not None:
-        ax.axhline(epsilon, color="0.3", lw=0.7, ls=":")
+        ax.axhline(epsilon, color="0.3", lw=0.9, ls=":", label=threshold_label(epsilon))
     ax.set_ylim(0, top)
     ax.set_ylabel("Confidence $\\hat\\beta_\\theta$")
-    ax.legend(loc="upper left", handlelength=1.2)
+
+
+def threshold_label(epsilon: float) -> str:
+    """Legend words of the threshold line: ``"threshold ε = 1"``."""
+    return f"threshold $\\epsilon$ = {epsilon:g}"
+
+
+def _intent_legend(fig, axes) -> None:
+    """One legend above the panels: every intent drawn, then the threshold."""
+    handles: dict[str, object] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    if handles:
+        # The threshold last, after the intents in the panels' order.
+        order = sorted(handles, key=lambda label: label.startswith("threshold"))
+        fig.legend(
+            [handles[label] for label in order],
+            order,
+            loc="outside upper center",
+            ncols=len(order),
+            handlelength=1.6,
+        )
+
+
+def _caption(rows: pd.DataFrame, participant: str, epsilon, title) -> str:
+    # "simulated": the data says so when steps carry a source.
+    sources = sorted(set(rows["source"].dropna().astype(str))) if "source" in rows else []
+    who = " ".join([" and ".join(sources), style.display_name(participant)]).strip()
+    caption = f"{title or 'Case study'}, {who}."
+    if participant in style.PARTICIPANT_NAMES:
+        caption += (
+            " A simulated operator with expert settings (short delay, little noise, no"
+            " lapses) that holds the keys along each task's intended path."
+        )
+    caption += (
+        " Confidence in each intent the robot knows, before and after learning the new"
+        " intent, and the user's control authority under PBA and CASA."
+    )
+    if epsilon is not None:
+        caption += (
+            f" Dotted: the misspecification threshold epsilon = {epsilon:g}; a CASA trial"
+            " flags misspecification when every known intent's confidence stays below it"
+            " over the trial's last seconds."
+        )
+    return caption
 
 
 def _alpha_panel(ax, in_task: pd.DataFrame) -> None:

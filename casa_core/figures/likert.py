@@ -2,19 +2,26 @@
 
 Three panels, one per task (Known Goal, Unknown Goal, Unknown Skill); in each, the
 three questions (the robot understood, made it effortless, was useful) along the x
-axis and one bar per condition with the mean and standard error on the 1-7 scale.
+axis and one bar per condition with the mean and standard error on the 1-7 scale, and
+every participant's answer as a point. Given ``stats.csv``, its H4 rows mark the tests:
+brackets for the Holm-corrected Wilcoxon signed-rank tests with p < .05, and the
+Friedman test of each question under its name.
 """
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
 from casa_core import tables
 from casa_core.figures import _bars, style
-from casa_core.vocabulary import QUESTION_LABELS, TASK_LABELS
+from casa_core.figures.objective import SIGNIFICANCE, parse_comparison, stars
+from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
 
 SCALE = (1, 7)
+#: The stats table's analyses the figure shows.
+FRIEDMAN, WILCOXON = "friedman", "wilcoxon"
 
 
 def prepare_likert(likert: pd.DataFrame) -> pd.DataFrame:
@@ -52,7 +59,56 @@ def prepare_likert(likert: pd.DataFrame) -> pd.DataFrame:
     return rows
 
 
-def likert_figure(likert: pd.DataFrame, title: str | None = None) -> Figure:
+def likert_tests(stats: pd.DataFrame | None) -> pd.DataFrame:
+    """The Friedman and Wilcoxon rows of ``stats.csv`` (hypothesis H4) that carry a p value.
+
+    Returns
+    -------
+    DataFrame
+        Columns ``analysis`` (``"friedman"`` or ``"wilcoxon"``), ``task``, ``question``,
+        ``a``, ``b`` (the two conditions a Wilcoxon row compares; empty for Friedman) and
+        ``p`` (for Wilcoxon rows, Holm-adjusted as the stats write it). Skipped tests (no
+        p) are left out.
+
+    Raises
+    ------
+    ValueError
+        Naming the stats row, if a comparison is not two conditions or p is not a number.
+    """
+    columns = ["analysis", "task", "question", "a", "b", "p"]
+    if stats is None or stats.empty:
+        return pd.DataFrame(columns=columns)
+    tables.require_columns(stats, ["analysis", "task", "metric", "comparison", "p"], "stats")
+    chosen = stats[stats["analysis"].astype(str).isin([FRIEDMAN, WILCOXON])]
+    out = []
+    for index, row in chosen.iterrows():
+        if pd.isna(row["p"]) or str(row["p"]) == "":
+            continue  # a skipped test: its note says why
+        p = pd.to_numeric(row["p"], errors="coerce")
+        if not np.isfinite(p):
+            raise ValueError(f"stats row {index}: p {row['p']!r} is not a number")
+        a = b = ""
+        if row["analysis"] == WILCOXON:
+            try:
+                a, b = parse_comparison(row["comparison"])
+            except ValueError as error:
+                raise ValueError(f"stats row {index}: {error}") from None
+        out.append(
+            {
+                "analysis": str(row["analysis"]),
+                "task": str(row["task"]),
+                "question": str(row["metric"]),
+                "a": a,
+                "b": b,
+                "p": float(p),
+            }
+        )
+    return pd.DataFrame(out, columns=columns)
+
+
+def likert_figure(
+    likert: pd.DataFrame, stats: pd.DataFrame | None = None, title: str | None = None
+) -> Figure:
     """Draw the Likert scores of a study.
 
     Parameters
@@ -60,16 +116,22 @@ def likert_figure(likert: pd.DataFrame, title: str | None = None) -> Figure:
     likert : DataFrame
         ``likert.csv``: one row per participant, task, condition and question, columns
         ``participant, task, method, phase, question, score`` (and ``source``).
+    stats : DataFrame, optional
+        ``stats.csv``; its ``wilcoxon`` rows with (Holm-adjusted) ``p < .05`` become
+        brackets over the two conditions in that task and question, and its
+        ``friedman`` rows are written under each question (:func:`likert_tests`).
     title : str, optional
         First words of the caption (default "Likert scores").
 
     Returns
     -------
     Figure
-        Three axes, one per task, each with the questions along x; a task without
-        survey rows keeps its panel with a note.
+        Three axes, one per task, each with the questions along x, bars, participants'
+        points and the tests' marks; a task without survey rows keeps its panel with a
+        note.
     """
     rows = prepare_likert(likert)
+    tests = likert_tests(stats)
     questions = list(QUESTION_LABELS)
     with style.context():
         fig = style.new_figure(7.0, 2.3)
@@ -82,10 +144,12 @@ def likert_figure(likert: pd.DataFrame, title: str | None = None) -> Figure:
                 style.note_axes(ax, f"no survey answers\nfor {task_label}")
                 continue
             points = _bars.participant_means(in_task, ["question", "condition"], "score")
-            _bars.draw_grouped_bars(ax, points, "question", questions, "score", show_points=False)
-            ax.set_xticklabels([QUESTION_LABELS[q] for q in questions])
-            ax.set_ylim(SCALE[0], SCALE[1] + 0.2)
+            tops = _bars.draw_grouped_bars(ax, points, "question", questions, "score")
+            in_tests = tests[tests["task"] == task]
+            ax.set_xticklabels([_question_label(q, in_tests, stats is not None) for q in questions])
+            ax.set_ylim(SCALE[0] - 0.3, SCALE[1] + 0.3)
             ax.set_yticks(range(SCALE[0], SCALE[1] + 1))
+            _bars.draw_brackets(ax, _brackets(tops, in_tests))
         for ax in axes:
             if ax.has_data():
                 ax.set_ylabel("Likert score (1-7)")
@@ -96,7 +160,49 @@ def likert_figure(likert: pd.DataFrame, title: str | None = None) -> Figure:
         caption += (
             " Bars: mean ± standard error over participants of the answer to: the robot"
             " understood how I wanted the task done; made the interaction more effortless;"
-            " the assistance was useful (1 = strongly disagree, 7 = strongly agree)."
+            " the assistance was useful (1 = strongly disagree, 7 = strongly agree);"
+            " points: participants' answers, spread sideways."
         )
+        if stats is not None:
+            caption += (
+                " Stars under each question: Friedman test over the task's conditions (n.s.:"
+                f" p ≥ {_p_text(SIGNIFICANCE)}). Brackets:"
+                f" Wilcoxon signed-rank tests of {TASK_LABELS[KNOWN_TASK]}'s CASA, and of"
+                " CASA after learning in the other tasks, against each other condition,"
+                " Holm-corrected over those comparisons per task and question; shown where"
+                f" p < {_p_text(SIGNIFICANCE)} (alpha); * p < .05, ** p < .01, *** p < .001."
+            )
         style.add_caption(fig, caption)
     return fig
+
+
+def _p_text(p: float) -> str:
+    """``0.05`` as APA writes it, ``".05"``."""
+    return f"{p:g}".removeprefix("0")
+
+
+def _question_label(question: str, tests: pd.DataFrame, with_tests: bool) -> str:
+    """The question's name and, under it, its Friedman test's stars ("n.s.", "no test")."""
+    label = QUESTION_LABELS[question]
+    if not with_tests:
+        return label
+    friedman = tests[(tests["analysis"] == FRIEDMAN) & (tests["question"] == question)]
+    if friedman.empty:
+        return f"{label}\nno test"
+    return f"{label}\n{stars(float(friedman['p'].iloc[0])) or 'n.s.'}"
+
+
+def _brackets(tops, tests: pd.DataFrame) -> list[tuple[float, float, float, str]]:
+    """Bracket geometry of the significant Wilcoxon rows whose two bars are drawn."""
+    brackets = []
+    wilcoxon = tests[tests["analysis"] == WILCOXON]
+    for row in wilcoxon.itertuples(index=False):
+        label = stars(row.p)
+        pair = ((row.question, row.a), (row.question, row.b))
+        if not label or any(key not in tops for key in pair):
+            continue
+        xa, xb = (tops[key][0] for key in pair)
+        x0, x1 = min(xa, xb), max(xa, xb)
+        base = max(top for (q, _), (x, top) in tops.items() if q == row.question and x0 <= x <= x1)
+        brackets.append((x0, x1, base, label))
+    return brackets

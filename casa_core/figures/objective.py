@@ -1,10 +1,14 @@
-"""The user study's objective metrics (paper, Fig. "study_objective").
+"""The user study's objective metrics (paper, Fig. "study_objective"), and task success.
 
-Three panels: error, efficiency cost and effort relative to direct teleoperation.
-Tasks along the x axis; in each, one bar per condition (NA, PBA, CASA, CASA before /
-after learning where they apply) with the mean and standard error over participants,
-every participant as a point, and significance brackets from the Tukey HSD rows of
-the stats table.
+One column per task, one row per metric: error, efficiency cost, effort relative to
+direct teleoperation, and the success rate. Every panel has its own y scale, so the
+Known Goal's small errors read as well as the misspecified tasks' large ones. In each,
+one bar per condition (NA, PBA, CASA, CASA before / after learning where they apply):
+for the metrics the mean and standard error over participants, every participant as a
+point (a cross when the trial ran out of time) and significance brackets from the Tukey
+HSD rows of the stats table for that task; for success the proportion of trials that
+succeeded (:func:`casa_core.metrics.task_success`) with its Wilson 95 % interval and
+the counts.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from matplotlib.figure import Figure
 
 from casa_core import tables
 from casa_core.figures import _bars, style
+from casa_core.metrics import POUR_TILT_TOLERANCE, SUCCESS_RADIUS
 from casa_core.vocabulary import (
     CASA_AFTER_LEARNING,
     CASA_BEFORE_LEARNING,
@@ -42,6 +47,13 @@ POOLED_TASKS = {
     "unknown": UNKNOWN_TASKS,
     "all": style.SHOWN_TASKS,
 }
+
+#: The trials.csv columns of the trial's outcome: whether it ran out of time (empty when
+#: its log does not say its limit) and whether it succeeded.
+TIMED_OUT, SUCCESS = "timed_out", "success"
+SUCCESS_AXIS = "Success (share of trials)"
+#: The legend's words for a trial that ran out of time.
+TIMED_OUT_LABEL = "ran out of time"
 
 SIGNIFICANCE = 0.05
 
@@ -139,33 +151,58 @@ def tukey_rows(stats: pd.DataFrame | None, metric_names: tuple[str, ...]) -> pd.
 
 
 def prepare_trials(trials: pd.DataFrame) -> pd.DataFrame:
-    """Trials of the compared tasks and phases, with their ``condition`` (paper's words)."""
+    """Trials of the compared tasks and phases, with their ``condition`` (paper's words).
+
+    The optional columns ``timed_out`` and ``success`` become 1.0 (true), 0.0 (false)
+    or NaN (empty, or the column absent); any other value is an error naming the row.
+    """
     tables.require_columns(
         trials, ["participant", "task", "method", "phase", *[m for m, _, _ in METRICS]], "trials"
     )
     rows = trials[trials["task"].isin(list(style.SHOWN_TASKS))]
     rows = rows[~rows["phase"].isin(UNANALYSED_PHASES)].copy()
     rows = style.label_conditions(rows, "trials")
+    for column in (TIMED_OUT, SUCCESS):
+        rows[column] = _flags(rows[column], column) if column in rows else np.nan
     return rows
+
+
+#: The cells a true/false column may hold: what pandas writes and reads, and JSON's words.
+_FLAG_VALUES = {"true": 1.0, "false": 0.0, "1": 1.0, "0": 0.0, "1.0": 1.0, "0.0": 0.0}
+
+
+def _flags(values: pd.Series, column: str) -> pd.Series:
+    """A true/false column as 1.0 / 0.0, NaN where empty."""
+    out = []
+    for index, value in values.items():
+        if value is None or (isinstance(value, float) and np.isnan(value)) or value == "":
+            out.append(np.nan)
+            continue
+        flag = _FLAG_VALUES.get(str(value).strip().lower())
+        if flag is None:
+            raise ValueError(f"trials row {index}: {column} {value!r} is not true or false")
+        out.append(flag)
+    return pd.Series(out, index=values.index, dtype=float)
 
 
 def objective_figure(
     trials: pd.DataFrame, stats: pd.DataFrame | None = None, title: str | None = None
 ) -> Figure:
-    """Draw the objective metrics of a study.
+    """Draw the objective metrics and the success rate of a study.
 
     Parameters
     ----------
     trials : DataFrame
         ``trials.csv`` (one row per trial; columns ``participant, task, method, phase,
-        source, error, efficiency, relative_effort``, ...).
+        source, error, efficiency, relative_effort`` and, when present, ``timed_out``
+        and ``success``).
     stats : DataFrame, optional
         ``stats.csv``; its Tukey HSD rows (``analysis`` containing "tukey") with
-        ``p < 0.05`` become brackets over the two conditions compared, in every task the
-        row covers. For a pair of conditions in a task, the row of that task alone wins
-        over a row pooled over several tasks (the ANCOVA's over both misspecified
-        tasks); a pooled row drawn is said so in the caption. Rows without ``p`` (tests
-        the stats skipped) draw nothing.
+        ``p < 0.05`` become brackets over the two conditions compared, in the panel
+        of every task the row covers. For a pair of conditions in a task, the row of
+        that task alone wins over a row pooled over several tasks (the ANCOVA's over
+        both misspecified tasks); a pooled row drawn is said so in the caption. Rows
+        without ``p`` (tests the stats skipped) draw nothing.
     title : str, optional
         First words of the caption (default "Objective metrics"); the caption goes on
         with who the participants are (e.g. "simulated participants") and how many.
@@ -173,42 +210,117 @@ def objective_figure(
     Returns
     -------
     Figure
-        Three axes (error, efficiency cost, relative effort), tasks along x. Tasks the
-        data lack are left out, and a caption names them and any missing condition.
+        A grid of axes: one row per metric of :data:`METRICS`, then success; one column
+        per task present, each panel on its own y scale. Tasks the data lack are left
+        out, and a caption names them, any missing condition, and how many trials ran
+        out of time.
     """
     rows = prepare_trials(trials)
     tasks = [t for t in style.SHOWN_TASKS if t in set(rows["task"])]
+    columns = tasks or [None]
     with style.context():
-        fig = style.new_figure(7.0, 2.5)
-        axes = fig.subplots(1, len(METRICS))
+        fig = style.new_figure(7.0, 1.6 * (len(METRICS) + 1) + 0.7)
+        grid = fig.subplots(len(METRICS) + 1, len(columns), squeeze=False)
         notes = _missing_notes(rows, tasks)
         pooled = False
-        for ax, (metric, label, stat_names) in zip(axes, METRICS, strict=True):
-            points = _bars.participant_means(rows, ["task", "condition"], metric)
-            if points.empty:
-                style.note_axes(ax, f"no {label.split(' (')[0].lower()} in the data")
+        for (metric, label, stat_names), axes in zip(METRICS, grid, strict=False):
+            tukey = tukey_rows(stats, stat_names)
+            for ax, task in zip(axes, columns, strict=True):
+                in_task = rows[rows["task"] == task]
+                points = _bars.participant_means(
+                    in_task, ["task", "condition"], metric, flags=[TIMED_OUT]
+                )
+                if points.empty:
+                    style.note_axes(ax, f"no {label.split(' (')[0].lower()} in the data")
+                    continue
+                tops = _bars.draw_grouped_bars(
+                    ax,
+                    points,
+                    "task",
+                    [task],
+                    metric,
+                    marked=TIMED_OUT,
+                    marked_label=TIMED_OUT_LABEL,
+                )
+                ax.set_ylim(bottom=0)
+                if metric == "relative_effort":
+                    # Direct teleoperation is 1 by the metric's definition.
+                    ax.axhline(1.0, color="0.4", lw=0.6, ls=":", zorder=1)
+                brackets, used_pooled = _brackets(tops, tukey)
+                pooled |= used_pooled
+                _bars.draw_brackets(ax, brackets)
+            axes[0].set_ylabel(label)
+        for ax, task in zip(grid[-1], columns, strict=True):
+            in_task = rows[rows["task"] == task]
+            if in_task[SUCCESS].isna().all():
+                style.note_axes(ax, "no success in the data")
                 continue
-            tops = _bars.draw_grouped_bars(ax, points, "task", tasks, metric)
-            ax.set_xticklabels([TASK_LABELS[t].replace(" ", "\n") for t in tasks])
-            ax.set_ylabel(label)
-            ax.set_ylim(bottom=0)
-            if metric == "relative_effort":
-                # Direct teleoperation is 1 by the metric's definition.
-                ax.axhline(1.0, color="0.4", lw=0.6, ls=":", zorder=1)
-            brackets, used_pooled = _brackets(tops, tukey_rows(stats, stat_names))
-            pooled |= used_pooled
-            _bars.draw_brackets(ax, brackets)
-        _bars.condition_legend(fig, axes)
-        caption = style.describe(title or "Objective metrics", rows)
-        caption += (
-            " Bars: mean ± standard error over participants; points: participants."
-            " Effort: key presses relative to the same participant's NA trial."
-        )
-        if stats is not None:
-            caption += " Brackets: Tukey HSD, * p < .05, ** p < .01, *** p < .001"
-            caption += " (pooled over the tasks of the analysis)." if pooled else "."
-        style.add_caption(fig, " ".join([caption, *notes]))
+            _bars.draw_proportions(ax, in_task, SUCCESS)
+        grid[-1][0].set_ylabel(SUCCESS_AXIS)
+        for ax, task in zip(grid[0], columns, strict=True):
+            ax.set_title(TASK_LABELS[task] if task else "")
+        for ax in grid.flat:
+            ax.set_xticks([])
+        _bars.condition_legend(fig, grid.flat, extra=[TIMED_OUT_LABEL])
+        style.add_caption(fig, " ".join([_caption(rows, stats, pooled, title), *notes]))
     return fig
+
+
+def _caption(rows: pd.DataFrame, stats, pooled: bool, title: str | None) -> str:
+    caption = style.describe(title or "Objective metrics", rows)
+    caption += (
+        " One column per task, each panel on its own y scale."
+        " Bars: mean ± standard error over participants; points: participants."
+        " Effort: key presses relative to the same participant's NA trial."
+        f" Success: the trial ends with the end effector within {SUCCESS_RADIUS * 100:g} cm"
+        " of the end of the intended trajectory (pour: and the cup within"
+        f" {POUR_TILT_TOLERANCE:g} rad of the pouring tilt), whether or not it ran out of"
+        " time; bars: share of trials, whiskers: Wilson 95% interval, k/n: successes/trials."
+    )
+    caption += " " + _timed_out_sentence(rows)
+    if stats is not None:
+        caption += (
+            " Brackets: Tukey HSD between the conditions of one task, the pairwise"
+            " comparisons after that task's one-way ANOVA (stats.csv analysis 'tukey'),"
+            " * p < .05, ** p < .01, *** p < .001"
+        )
+        caption += (
+            "; where a task has no test of its own, the test pooled over the misspecified"
+            " tasks (after their ANCOVA)."
+            if pooled
+            else "."
+        )
+    return caption
+
+
+def _timed_out_sentence(rows: pd.DataFrame) -> str:
+    """How many trials ran out of time, at what limit, and in which task and condition."""
+    known = rows.dropna(subset=[TIMED_OUT])
+    if known.empty:
+        return "The logs do not say their time limit: trials that ran out of time are not marked."
+    out = known[known[TIMED_OUT] == 1.0]
+    sentence = f"{len(out)} of {len(known)} trials ran out of time"
+    if len(out):
+        # The trials that ran out stopped at the limit (to within a tick).
+        limits = sorted({f"{d:.0f}" for d in out["duration"]}) if "duration" in out else []
+        if limits:
+            sentence += f" at {' or '.join(limits)} s"
+        sentence += ", drawn as crosses"
+        parts = []
+        for task in style.SHOWN_TASKS:
+            counts = []
+            for condition in CONDITIONS:
+                cell = known[(known["task"] == task) & (known["condition"] == condition)]
+                ran_out = int((cell[TIMED_OUT] == 1.0).sum())
+                if ran_out:
+                    counts.append(f"{condition} {ran_out} of {len(cell)}")
+            if counts:
+                parts.append(f"{TASK_LABELS[task]}: {', '.join(counts)}")
+        sentence += " (" + "; ".join(parts) + ")"
+    sentence += "."
+    if len(known) < len(rows):
+        sentence += f" {len(rows) - len(known)} logs do not say their limit."
+    return sentence
 
 
 def _brackets(tops, tukey: pd.DataFrame) -> tuple[list[tuple[float, float, float, str]], bool]:

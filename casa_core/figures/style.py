@@ -47,6 +47,35 @@ OTHER_INTENT_COLOURS: tuple[str, ...] = ("#A6611A", "#000000", "#0072B2", "#E69F
 
 SIMULATED_NOTE = "simulated participants"
 
+#: What the figures call a participant of the tables by its name: the case study's
+#: ``expert`` is not a person but a simulated operator with expert settings that holds
+#: the keys along each task's intended path.
+PARTICIPANT_NAMES: dict[str, str] = {"expert": "scripted expert (waypoint follower)"}
+
+
+def display_name(name: str) -> str:
+    """The words a figure shows for an intent or participant named ``name`` in the tables.
+
+    Underscores become spaces; a goal's colour names the goal (``"green"`` is the
+    "green goal", a learned ``"learned_red"`` the "learned red goal"); names of
+    :data:`PARTICIPANT_NAMES` take their description; any other name (a condition such
+    as "CASA before learning") is kept.
+
+    Examples
+    --------
+    >>> [display_name(n) for n in ("green", "learned_red", "learned_pour", "CASA")]
+    ['green goal', 'learned red goal', 'learned pour', 'CASA']
+    >>> display_name("expert")
+    'scripted expert (waypoint follower)'
+    """
+    name = str(name)
+    if name in PARTICIPANT_NAMES:
+        return PARTICIPANT_NAMES[name]
+    words = name.replace("_", " ").split()
+    if words and words[-1].lower() in GOAL_COLOURS:
+        words.append("goal")
+    return " ".join(words) or name
+
 
 def row_condition(method: str, phase: str) -> str:
     """The condition a figure labels a row with: the paper's, else the method's name.

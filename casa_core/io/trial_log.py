@@ -248,7 +248,7 @@ def write_trial(stem: Path | str, meta: dict, frame: pd.DataFrame) -> None:
     meta : dict
         The metadata (``docs/data-contracts.md``): ``schema``, ``participant``,
         ``task``, ``method``, ``phase``, ``source``; optional ``intents``, ``seed``,
-        ``started_at``, ``notes``. ``schema`` defaults to ``"casa-trial/1"``.
+        ``started_at``, ``notes``, ``max_duration``. ``schema`` defaults to ``"casa-trial/1"``.
     frame : pandas.DataFrame
         One row per control tick with ``t, x, y, z, rot, keys`` and optionally
         ``alpha``, ``q1``..``q7``, ``beta:NAME``, ``belief:NAME``. ``keys`` holds

@@ -15,6 +15,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import pandas as pd
@@ -94,6 +95,13 @@ def _intent_names(intents, meta: dict) -> str | None:
     return None
 
 
+def _positive_number(value, meta: dict) -> str | None:
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if number and math.isfinite(value) and value > 0:
+        return None
+    return f"is {value!r}, expected a positive number of seconds"
+
+
 #: The metadata rules after the required and unknown keys, in the order they are
 #: reported: (key, rule, check). A check runs when its key is present.
 META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
@@ -103,6 +111,7 @@ META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
     ("phase", "task-phase", _task_phase),
     ("method", "phase-method", _phase_method),
     ("intents", "intent-names", _intent_names),
+    ("max_duration", "positive-number", _positive_number),
 )
 
 

@@ -3,9 +3,11 @@
 The JACO arm at the start pose, the table, the goals in their colours, the pouring
 target and bowl come from :class:`~casa_core.robot.sim.ArmSimulation` (which loads the
 arm's URDF and builds the scene); this module adds the tasks' intended trajectories
-(:func:`casa_core.tasks.intended_trajectory`) as thin tubes and renders the view with
-``ER_TINY_RENDERER``, which needs no display or GPU. The figure around the image is
-:func:`casa_core.figures.scene.scene_figure`.
+(:func:`casa_core.tasks.intended_trajectory`) as thin tubes, the cup in the hand at the
+start, the cup tilted at the pouring pose and a dashed plumb line from there down to
+the bowl, and renders the view with ``ER_TINY_RENDERER``, which needs no display or
+GPU. :func:`scene_landmarks` gives where the cup, the pouring pose and the bowl land in
+the image, for the figure's labels (:func:`casa_core.figures.scene.scene_figure`).
 """
 
 from __future__ import annotations
@@ -14,10 +16,18 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from casa_core.robot.kinematics import ee_rotation
+from casa_core.robot.scene import BOWL_RADIUS, COLORS, bowl_height
 from casa_core.scene import Scene
 from casa_core.tasks import intended_trajectory
 
 TUBE_RADIUS = 0.005  # m
+#: The cup as drawn: a cylinder along the tool's x axis (its mouth), centred where the
+#: tool holds it; larger than the hand's fingers so that it shows around them.
+CUP_RADIUS, CUP_LENGTH = 0.042, 0.12  # m
+#: The plumb line from the pouring pose to the bowl: dashes and gaps (m), and colour.
+DASH, GAP = 0.018, 0.012
+PLUMB_RGBA = (0.15, 0.15, 0.15, 1.0)
 
 #: The camera: looking at the workspace from the front left, above the table.
 CAMERA = {
@@ -29,7 +39,7 @@ CAMERA = {
 }
 
 
-def _segment(client: int, a: np.ndarray, b: np.ndarray, rgba) -> None:
+def _segment(client: int, a: np.ndarray, b: np.ndarray, rgba, radius: float = TUBE_RADIUS) -> None:
     """A visual-only cylinder from ``a`` to ``b`` (pybullet cylinders lie along local z)."""
     import pybullet as p
 
@@ -47,7 +57,7 @@ def _segment(client: int, a: np.ndarray, b: np.ndarray, rgba) -> None:
         half = np.arctan2(sin, cos) / 2
         quaternion = (*(np.sin(half) * cross / sin), np.cos(half))
     shape = p.createVisualShape(
-        p.GEOM_CYLINDER, radius=TUBE_RADIUS, length=length, rgbaColor=rgba, physicsClientId=client
+        p.GEOM_CYLINDER, radius=radius, length=length, rgbaColor=rgba, physicsClientId=client
     )
     p.createMultiBody(
         baseMass=0,
@@ -56,6 +66,82 @@ def _segment(client: int, a: np.ndarray, b: np.ndarray, rgba) -> None:
         baseOrientation=quaternion,
         physicsClientId=client,
     )
+
+
+def _cup(client: int, position, rot: float, rgba) -> None:
+    """The cup held at ``position`` with the tool turned to ``rot`` (its mouth along x)."""
+    axis = ee_rotation(rot)[:, 0]
+    centre = np.asarray(position, dtype=float)
+    half = 0.5 * CUP_LENGTH * axis
+    _segment(client, centre - half, centre + half, rgba, radius=CUP_RADIUS)
+
+
+def _plumb_line(client: int, top, bottom) -> None:
+    """A dashed vertical line from ``top`` down to ``bottom``."""
+    top, bottom = np.asarray(top, dtype=float), np.asarray(bottom, dtype=float)
+    length = float(np.linalg.norm(top - bottom))
+    direction = (bottom - top) / length if length > 0 else np.zeros(3)
+    start = 0.0
+    while start < length:
+        end = min(start + DASH, length)
+        _segment(client, top + start * direction, top + end * direction, PLUMB_RGBA, radius=0.003)
+        start = end + GAP
+
+
+def landmark_positions(scene: Scene) -> dict[str, np.ndarray]:
+    """The scene's points the figure labels, in the robot base frame (m).
+
+    ``"cup"``: the top of the cup in the hand at the start; ``"pouring pose"``: where
+    the cup is held to pour; ``"bowl"``: the near rim of the bowl's top, under it.
+    """
+    start = np.asarray(scene.start.position, dtype=float)
+    pour = np.asarray(scene.pouring.position, dtype=float)
+    bowl = np.asarray(scene.pouring.bowl, dtype=float)
+    return {
+        "cup": start + 0.5 * CUP_LENGTH * ee_rotation(scene.start.rot)[:, 0],
+        "pouring pose": pour,
+        "bowl": np.array([bowl[0] - BOWL_RADIUS, bowl[1], bowl_height(scene)]),
+    }
+
+
+def _camera(width: int, height: int) -> tuple[list[float], list[float]]:
+    """pybullet's view and projection matrices of :data:`CAMERA` (column-major, 16 each)."""
+    import pybullet as p
+
+    view = p.computeViewMatrixFromYawPitchRoll(
+        cameraTargetPosition=CAMERA["target"],
+        distance=CAMERA["distance"],
+        yaw=CAMERA["yaw"],
+        pitch=CAMERA["pitch"],
+        roll=0.0,
+        upAxisIndex=2,
+    )
+    projection = p.computeProjectionMatrixFOV(
+        fov=CAMERA["fov"], aspect=width / height, nearVal=0.05, farVal=5.0
+    )
+    return view, projection
+
+
+def scene_landmarks(
+    scene: Scene, *, width: int = 1200, height: int = 900
+) -> dict[str, tuple[float, float]]:
+    """Where :func:`landmark_positions` land in :func:`render_scene`'s image, in pixels.
+
+    Returns
+    -------
+    dict
+        Name -> ``(column, row)`` from the image's top-left corner, for an image of
+        ``width`` x ``height`` pixels rendered with the same camera.
+    """
+    view, projection = _camera(width, height)
+    # pybullet's matrices are column-major: transpose to act on column vectors.
+    to_clip = np.asarray(projection).reshape(4, 4).T @ np.asarray(view).reshape(4, 4).T
+    out = {}
+    for name, point in landmark_positions(scene).items():
+        clip = to_clip @ np.r_[point, 1.0]
+        x, y = clip[:2] / clip[3]
+        out[name] = (float((x + 1) / 2 * width), float((1 - y) / 2 * height))
+    return out
 
 
 def _path(client: int, positions: np.ndarray, rgba) -> None:
@@ -83,7 +169,11 @@ def render_scene(
     width: int = 1200,
     height: int = 900,
 ) -> np.ndarray:
-    """Render the arm, the scene and the tasks' intended trajectories headless.
+    """Render the arm, the scene, the cup and the tasks' intended trajectories headless.
+
+    The cup is drawn twice, in :data:`casa_core.robot.scene.COLORS` ``"cup"``: in the hand
+    at the start, and tilted to ``scene.pouring.tilt`` at the pouring pose (``"cup
+    poured"``), with a dashed plumb line from there to the bowl.
 
     Parameters
     ----------
@@ -109,24 +199,17 @@ def render_scene(
     with ArmSimulation(scene, gui=False) as sim:
         client = sim.client
         # The tiny renderer draws no transparency: the translucent pouring marker would
-        # be an opaque ball hiding the goals. The pouring spot is where the Unknown
-        # Skill path ends, above the bowl.
+        # be an opaque ball hiding the goals. The cup tilted there marks the spot.
         p.removeBody(sim.bodies.pouring, physicsClientId=client)
         for task, colour in (paths or {}).items():
             # One sample a second is plenty: the references are straight segments.
             positions = intended_trajectory(task, scene, dt=1.0)[:, 1:4]
             _path(client, positions, to_rgba(colour))
-        view = p.computeViewMatrixFromYawPitchRoll(
-            cameraTargetPosition=CAMERA["target"],
-            distance=CAMERA["distance"],
-            yaw=CAMERA["yaw"],
-            pitch=CAMERA["pitch"],
-            roll=0.0,
-            upAxisIndex=2,
-        )
-        projection = p.computeProjectionMatrixFOV(
-            fov=CAMERA["fov"], aspect=width / height, nearVal=0.05, farVal=5.0
-        )
+        _cup(client, scene.start.position, scene.start.rot, COLORS["cup"])
+        _cup(client, scene.pouring.position, scene.pouring.tilt, COLORS["cup poured"])
+        bowl = scene.pouring.bowl
+        _plumb_line(client, scene.pouring.position, (bowl[0], bowl[1], bowl_height(scene)))
+        view, projection = _camera(width, height)
         _, _, rgba, _, _ = p.getCameraImage(
             width,
             height,

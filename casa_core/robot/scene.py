@@ -21,10 +21,20 @@ COLORS = {
     "red": (0.9, 0.1, 0.1, 0.9),
     "pouring": (0.2, 0.5, 0.95, 0.35),
     "bowl": (0.95, 0.8, 0.3, 1.0),
+    # The cup: a saturated blue no goal, path or the arm has, so it stands out.
+    "cup": (0.0, 0.35, 0.95, 1.0),
+    "cup poured": (0.35, 0.6, 1.0, 1.0),
     "table": (0.72, 0.6, 0.45, 1.0),
 }
 
 GOAL_RADIUS = 0.03
+BOWL_RADIUS = 0.07  # m
+
+
+def bowl_height(scene: Scene) -> float:
+    """Height (m) of the bowl: it stands on the table, centred at ``pouring.bowl``."""
+    z = scene.pouring.bowl[2]
+    return 2 * z if z > 0 else 0.04
 
 
 @dataclass(frozen=True)
@@ -77,18 +87,18 @@ def build_scene(client: int, scene: Scene) -> SceneBodies:
     pouring = _marker(client, scene.pouring.position, 0.05, COLORS["pouring"])
     # The bowl is a cylinder standing on the table with its centre at ``pouring.bowl``.
     bowl_position = scene.pouring.bowl
-    bowl_height = 2 * bowl_position[2] if bowl_position[2] > 0 else 0.04
+    height = bowl_height(scene)
     bowl_vis = p.createVisualShape(
         p.GEOM_CYLINDER,
-        radius=0.07,
-        length=bowl_height,
+        radius=BOWL_RADIUS,
+        length=height,
         rgbaColor=COLORS["bowl"],
         physicsClientId=client,
     )
     bowl = p.createMultiBody(
         baseMass=0,
         baseVisualShapeIndex=bowl_vis,
-        basePosition=[bowl_position[0], bowl_position[1], bowl_height / 2],
+        basePosition=[bowl_position[0], bowl_position[1], height / 2],
         physicsClientId=client,
     )
     return SceneBodies(table=table, goals=goals, pouring=pouring, bowl=bowl)

@@ -187,6 +187,7 @@ def run_trial(
         "phase": phase,
         "source": source_kind,
         "intents": [intent.name for intent in intents],
+        "max_duration": float(max_duration),  # so a reader can tell a trial that ran out
     }
     if assistant.arbitration != "none":  # what inference observed (Assistant, evidence)
         meta["notes"] = f"evidence: {assistant.evidence}"

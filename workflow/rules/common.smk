@@ -125,3 +125,18 @@ def all_outputs():
             str(FIGURES / f"{f}.{e}") for f in ("case_study", "arbitration") for e in ("pdf", "png")
         ]
     return outputs
+
+
+# The HTML report's pages (workflow/rules/report.smk).
+REPORT = Path("data/report")
+# The tables of every dataset; the simulated study also has learning.csv.
+REPORT_TABLES = ("trials", "validation")
+
+
+def report_pages():
+    pages = [str(PROCESSED / ds / "summary.md") for ds in DATASETS]
+    names = ("summary", "stats", *REPORT_TABLES)
+    pages += [str(REPORT / ds / f"{name}.html") for ds in DATASETS for name in names]
+    if SIMULATE:
+        pages.append(str(REPORT / "simulated" / "learning.html"))
+    return pages

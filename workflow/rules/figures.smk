@@ -29,6 +29,7 @@ rule figure_objective:
 rule figure_likert:
     input:
         likert=PROCESSED / "{ds}" / "likert.csv",
+        stats=PROCESSED / "{ds}" / "stats.csv",
     output:
         pdf=FIGURES / "{ds}" / "likert.pdf",
         png=report(
@@ -44,7 +45,8 @@ rule figure_likert:
     params:
         stem=lambda wildcards: FIGURES / wildcards.ds / "likert",
     shell:
-        "casa figure likert --likert {input.likert} --out {params.stem} > {log} 2>&1"
+        "casa figure likert --likert {input.likert} --stats {input.stats} "
+        "--out {params.stem} > {log} 2>&1"
 
 
 rule figure_scene:
@@ -76,9 +78,10 @@ rule figure_arbitration:
         "../envs/casa.yaml"
     params:
         stem=FIGURES / "arbitration",
+        epsilon=config["case_study"]["epsilon"],
     shell:
-        "casa figure arbitration --arbitration {input.arbitration} --out {params.stem} "
-        "> {log} 2>&1"
+        "casa figure arbitration --arbitration {input.arbitration} "
+        "--epsilon {params.epsilon} --out {params.stem} > {log} 2>&1"
 
 
 rule figure_case_study:
@@ -97,5 +100,7 @@ rule figure_case_study:
         "../envs/casa.yaml"
     params:
         stem=FIGURES / "case_study",
+        epsilon=config["case_study"]["epsilon"],
     shell:
-        "casa figure case_study --steps {input.steps} --out {params.stem} > {log} 2>&1"
+        "casa figure case_study --steps {input.steps} --epsilon {params.epsilon} "
+        "--out {params.stem} > {log} 2>&1"

@@ -1,0 +1,117 @@
+"""``casa report``: the pages of the HTML report (``snakemake --report``) from the tables."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+#: One example per page, shown by each command's --help.
+_EXAMPLES = {
+    "summary": "casa report summary --stats data/processed/simulated/stats.csv "
+    "--dataset simulated \\\n      --out-md data/processed/simulated/summary.md "
+    "--out-html data/report/simulated/summary.html",
+    "markdown": "casa report markdown data/processed/simulated/stats.md "
+    "--out data/report/simulated/stats.html",
+    "table": "casa report table data/processed/simulated/trials.csv "
+    "--out data/report/simulated/trials.html",
+}
+
+
+def _epilog(*pages: str) -> str:
+    return "example:\n" + "\n".join(f"  {_EXAMPLES[page]}" for page in pages)
+
+
+def register(commands) -> None:
+    """Add this module's commands to the ``casa`` subcommands."""
+    import argparse
+
+    command = commands.add_parser(
+        "report",
+        help="the HTML report's pages: results summary, rendered Markdown, browsable tables",
+        epilog=_epilog(*_EXAMPLES),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    pages = command.add_subparsers(dest="page", metavar="PAGE", required=True)
+    summary = pages.add_parser(
+        "summary",
+        help="per hypothesis, the paper-form and within-subjects tests (stats.csv)",
+        epilog=_epilog("summary"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    summary.add_argument("--stats", required=True, metavar="CSV", help="stats.csv")
+    summary.add_argument("--dataset", required=True, help="the dataset's name, for the title")
+    summary.add_argument("--out-md", required=True, metavar="MD", help="summary.md to write")
+    summary.add_argument("--out-html", required=True, metavar="HTML", help="its HTML page")
+    summary.set_defaults(func=_summary)
+    markdown = pages.add_parser(
+        "markdown",
+        help="a Markdown file (e.g. stats.md) as HTML",
+        epilog=_epilog("markdown"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    markdown.add_argument("markdown", metavar="MD")
+    markdown.add_argument("--out", required=True, metavar="HTML")
+    markdown.set_defaults(func=_markdown)
+    table = pages.add_parser(
+        "table",
+        help="a processed table as a browsable HTML table",
+        epilog=_epilog("table"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    table.add_argument("table", metavar="CSV")
+    table.add_argument("--out", required=True, metavar="HTML")
+    table.add_argument("--title", help="the heading (default: the file's name)")
+    table.set_defaults(func=_table)
+
+
+def _fail(error: Exception) -> int:
+    print(f"casa report: {error}", file=sys.stderr)
+    return 1
+
+
+def _summary(args) -> int:
+    from casa_core import datasets, report_pages
+    from casa_core.io.atomic import atomic_write_text
+    from casa_core.stats.summary import summary_markdown
+
+    try:
+        text = summary_markdown(datasets.read_table(args.stats), dataset=args.dataset)
+    except (OSError, ValueError) as error:
+        return _fail(error)
+    atomic_write_text(args.out_md, text)
+    title = f"Results of dataset {args.dataset}"
+    atomic_write_text(
+        args.out_html, report_pages.page(report_pages.markdown_html(text), title=title)
+    )
+    print(f"casa report: {args.out_md}, {args.out_html}")
+    return 0
+
+
+def _markdown(args) -> int:
+    from casa_core import report_pages
+    from casa_core.io.atomic import atomic_write_text
+
+    try:
+        text = Path(args.markdown).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        return _fail(error)
+    body = report_pages.markdown_html(text)
+    atomic_write_text(args.out, report_pages.page(body, title=Path(args.markdown).name))
+    print(f"casa report: {args.out}")
+    return 0
+
+
+def _table(args) -> int:
+    from casa_core import datasets, report_pages
+    from casa_core.io.atomic import atomic_write_text
+
+    try:
+        frame = datasets.read_table(args.table)
+    except (OSError, ValueError) as error:
+        return _fail(error)
+    title = args.title or Path(args.table).name
+    note = f"{len(frame)} row(s) of {args.table}."
+    body = report_pages.table_html(frame, title=title, note=note)
+    atomic_write_text(args.out, report_pages.page(body, title=title))
+    print(f"casa report: {len(frame)} row(s) -> {args.out}")
+    return 0

@@ -1,0 +1,64 @@
+# The HTML report's pages (`snakemake --report report.html`): per dataset a results
+# summary from stats.csv, stats.md rendered, and the tables as browsable HTML, which the
+# report shows inline (a CSV or Markdown item could only be downloaded). The landing
+# page, workflow/report/workflow.rst, includes them in that order. Their paths:
+# report_pages() in common.smk.
+
+
+rule report_summary:
+    input:
+        stats=PROCESSED / "{ds}" / "stats.csv",
+    output:
+        md=PROCESSED / "{ds}" / "summary.md",
+        html=report(
+            REPORT / "{ds}" / "summary.html",
+            caption="../report/summary.rst",
+            category="{ds}",
+            subcategory="results",
+        ),
+    log:
+        "logs/report/{ds}/summary.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa report summary --stats {input.stats} --dataset {wildcards.ds} "
+        "--out-md {output.md} --out-html {output.html} > {log} 2>&1"
+
+
+rule report_stats:
+    input:
+        md=PROCESSED / "{ds}" / "stats.md",
+    output:
+        report(
+            REPORT / "{ds}" / "stats.html",
+            caption="../report/stats.rst",
+            category="{ds}",
+            subcategory="statistics",
+        ),
+    log:
+        "logs/report/{ds}/stats.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa report markdown {input.md} --out {output} > {log} 2>&1"
+
+
+rule report_table:
+    input:
+        PROCESSED / "{ds}" / "{table}.csv",
+    output:
+        report(
+            REPORT / "{ds}" / "{table}.html",
+            caption="../report/table.rst",
+            category="{ds}",
+            subcategory="tables",
+        ),
+    log:
+        "logs/report/{ds}/{table}.log",
+    wildcard_constraints:
+        table="trials|validation|learning",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "casa report table {input} --title '{wildcards.ds}: {wildcards.table}.csv' --out {output} "
+        "> {log} 2>&1"
