@@ -77,6 +77,28 @@ def test_rm_anova_degenerate(sleep):
     assert "at least 2 levels" in rm_anova(single, "extra", "group", "ID").iloc[0]["note"]
 
 
+def test_rm_anova_without_error_variance_reports_no_f(sleep):
+    # Each participant's second value is the first plus the same 1.5: the error term
+    # (participant x condition) is 0 and F = 1.5^2 n / 0 is undefined, not a number from
+    # rounding (pingouin gives about -7e17 here).
+    first = sleep[sleep["group"] == "1"]
+    additive = pd.concat([first, first.assign(group="2", extra=first["extra"] + 1.5)])
+    row = rm_anova(additive, "extra", "group", "ID").iloc[0]
+    assert np.isnan(row["F"]) and np.isnan(row["p"])
+    assert "no error variance" in row["note"]
+
+
+def test_rm_anova_accepts_a_dv_named_like_a_condition():
+    data = pd.DataFrame(
+        {
+            "s": ["a", "b", "c"] * 3,
+            "c": ["x"] * 3 + ["y"] * 3 + ["z"] * 3,
+            "y": [1.0, 2.0, 1.5, 2.0, 2.5, 3.5, 4.0, 3.0, 5.0],
+        }
+    )
+    assert rm_anova(data, "y", "c", "s").iloc[0]["F"] > 0
+
+
 # ------------------------------------------------------------------------ mixed model
 
 

@@ -48,6 +48,23 @@ def _complete_cells(frame, dv, within, subject):
     return cells[cells[subject].isin(keep)], note
 
 
+_DV = "__dv__"
+
+
+def _no_error_variance(cells, dv, factors, subject) -> bool:
+    """Whether the participants' and the cells' means explain every cell mean (to rounding).
+
+    The error terms of a repeated-measures ANOVA are the participant-by-condition
+    interactions; when they vanish, pingouin's F is a ratio of rounding errors.
+    """
+    wide = cells.pivot_table(index=subject, columns=factors, values=dv, observed=True)
+    values = wide.to_numpy(dtype=float)
+    grand = values.mean()
+    residual = values - values.mean(axis=1, keepdims=True) - values.mean(axis=0) + grand
+    total = ((values - grand) ** 2).sum()
+    return bool((residual**2).sum() <= 1e-12 * total)
+
+
 def rm_anova(
     data: pd.DataFrame, dv: str, within: str | Sequence[str], subject: str
 ) -> pd.DataFrame:
@@ -99,11 +116,18 @@ def rm_anova(
             raise Skipped(f"needs at least 2 participants with every condition, got {n}")
         if cells[dv].var() == 0.0:
             raise Skipped(f"zero variance: every value of {dv!r} is the same")
+        if _no_error_variance(cells, dv, factors, subject):
+            raise Skipped(
+                "no error variance: every participant differs between the conditions by the "
+                "same amount, so F is undefined"
+            )
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # pingouin 0.7 triggers pandas 3.1 deprecations
             table = pingouin.rm_anova(
-                data=cells,
-                dv=dv,
+                # A private name: pingouin melts the cells into a column named after dv,
+                # which fails when dv is also the name of a condition.
+                data=cells.rename(columns={dv: _DV}),
+                dv=_DV,
                 within=factors if len(factors) > 1 else factors[0],
                 subject=subject,
                 correction=True,
