@@ -229,6 +229,9 @@ def test_degenerate_inputs_give_notes_not_crashes(plants):
     assert "at least 2 levels" in tukey_hsd(one_group, "weight", "group").iloc[0]["note"]
     constant = plants.assign(weight=1.0)
     assert "zero variance" in anova(constant, "weight", "group").iloc[0]["note"]
+    # Equal to rounding (15 digits): statsmodels would report an F from rounding errors.
+    rounding = plants.assign(weight=0.267529 + 1e-15 * np.arange(len(plants)))
+    assert "zero variance" in anova(rounding, "weight", "group").iloc[0]["note"]
     assert np.isnan(anova(constant, "weight", "group").iloc[0]["F"])
     flat_groups = plants.assign(weight=plants["group"].map({"ctrl": 1.0, "trt1": 2.0, "trt2": 3.0}))
     assert "zero residual variance" in anova(flat_groups, "weight", "group").iloc[0]["note"]

@@ -73,6 +73,9 @@ def test_rm_anova_degenerate(sleep):
     assert "at least 2 participants" in rm_anova(one, "extra", "group", "ID").iloc[0]["note"]
     flat = sleep.assign(extra=2.0)
     assert "zero variance" in rm_anova(flat, "extra", "group", "ID").iloc[0]["note"]
+    # Equal to rounding: pingouin's F from such values is a ratio of rounding errors.
+    rounding = sleep.assign(extra=0.267529 + 1e-15 * np.arange(len(sleep)))
+    assert "zero variance" in rm_anova(rounding, "extra", "group", "ID").iloc[0]["note"]
     single = sleep[sleep["group"] == "1"]
     assert "at least 2 levels" in rm_anova(single, "extra", "group", "ID").iloc[0]["note"]
 

@@ -19,7 +19,7 @@ import statsmodels.formula.api as smf
 from scipy import stats
 from statsmodels.stats.anova import anova_lm
 
-from casa_core.stats._tables import Skipped, clean, levels, skipped_row
+from casa_core.stats._tables import Skipped, clean, equal_to_rounding, levels, skipped_row
 
 ANOVA_COLUMNS = ["term", "F", "df1", "df2", "p", "np2", "n"]
 TUKEY_COLUMNS = ["A", "B", "diff", "p", "ci_low", "ci_high", "n_A", "n_B"]
@@ -136,7 +136,7 @@ def _fit_linear_model(frame, dv, factors, covariate) -> pd.DataFrame:
         raise Skipped(f"the covariate {covariate!r} takes a single value")
     y = model_frame["y"].to_numpy()
     total_ss = float(np.sum((y - y.mean()) ** 2))
-    if total_ss <= 0.0:
+    if equal_to_rounding(y):
         raise Skipped(f"zero variance: every value of {dv!r} equals {y[0]!r}")
     fit = smf.ols("y ~ " + " + ".join(parts), data=model_frame).fit()
     if fit.df_resid < 1:

@@ -24,7 +24,7 @@ import statsmodels.formula.api as smf
 from scipy import stats
 from statsmodels.stats.multitest import multipletests
 
-from casa_core.stats._tables import Skipped, clean, levels, skipped_row
+from casa_core.stats._tables import Skipped, clean, equal_to_rounding, levels, skipped_row
 
 RM_COLUMNS = ["term", "F", "df1", "df2", "p", "p_gg", "eps", "ng2", "n"]
 MIXED_COLUMNS = ["term", "chi2", "df1", "p", "n", "n_groups"]
@@ -114,7 +114,7 @@ def rm_anova(
         n = cells[subject].nunique()
         if n < 2:
             raise Skipped(f"needs at least 2 participants with every condition, got {n}")
-        if cells[dv].var() == 0.0:
+        if equal_to_rounding(cells[dv]):
             raise Skipped(f"zero variance: every value of {dv!r} is the same")
         if _no_error_variance(cells, dv, factors, subject):
             raise Skipped(
