@@ -5,10 +5,9 @@
 #   snakemake --config allow_invalid=true  # exclude bad log files instead of stopping
 #   snakemake --report report.html         # one self-contained report
 #
-# Recommended options (keep building other datasets past a bad one, ...) are in
-# workflow/profiles/default. Snakemake picks that folder up by itself only for a
-# workflow/Snakefile, so name it: --workflow-profile workflow/profiles/default.
-# workflow/profiles/slurm runs the same DAG on a Slurm cluster.
+# Every run reads profiles/default (Snakemake finds it next to the Snakefile): keep
+# building the other datasets past a bad one, rerun what a killed run left incomplete.
+# `--workflow-profile profiles/slurm` runs the same DAG on a Slurm cluster.
 #
 # Datasets are the folders of data/raw/, found when the workflow is parsed: a
 # folder of casa-trial/1 logs dropped there is built on the next run.
@@ -18,6 +17,12 @@ min_version("9.0")
 
 
 configfile: "config/config.yaml"
+
+
+# Every rule runs `exec casa ...`: the casa process is the job itself, a child of
+# Snakemake with no shell in between. Given Snakemake's pid in CASA_PARENT_PID, it ends
+# when Snakemake dies, even by SIGKILL (casa_core/cli/_lifetime.py): no orphan runs on.
+shell.prefix("set -euo pipefail; export CASA_PARENT_PID=$PPID; ")
 
 
 include: "workflow/rules/common.smk"

@@ -76,17 +76,29 @@ def alpha_belief(p_star, n_intents):
     we build the described behaviour (see docs/departures.md): alpha = 1 for a
     uniform belief, 0 for a certain one.
 
+    With a single intent the formula is 0 / 0 and the belief, 1 by construction, is
+    also the uniform one: it says nothing about which intent the user pursues, there
+    being no alternative to compare. Belief arbitration then gives the user full
+    control, alpha = 1, as for any uniform belief, rather than handing the robot
+    full control on no evidence.
+
     Parameters
     ----------
     p_star : float or array_like
         P(theta* | xi), the belief in the most likely intent, in [0, 1].
     n_intents : int
-        |Theta|, the number of intents, >= 2.
+        |Theta|, the number of intents, >= 1.
 
     Returns
     -------
     float or ndarray
-        alpha, clipped to [0, 1].
+        alpha, clipped to [0, 1]; 1 for ``n_intents == 1``.
+
+    Raises
+    ------
+    ValueError
+        On NaN or a ``p_star`` outside [0, 1], or an ``n_intents`` that is not an
+        integer >= 1.
 
     Examples
     --------
@@ -94,12 +106,20 @@ def alpha_belief(p_star, n_intents):
     array([1., 0.])
     >>> alpha_belief(2 / 3, 3)
     0.5
+    >>> alpha_belief(1.0, 1)
+    1.0
     """
     p_star = as_finite_or_inf("p_star", p_star)
     if ((p_star < 0) | (p_star > 1)).any():
         raise ValueError("p_star must be a probability in [0, 1]")
-    if int(n_intents) != n_intents or n_intents < 2:
-        raise ValueError(f"belief arbitration needs at least 2 intents, got {n_intents!r}")
+    try:
+        whole = int(n_intents) == n_intents and not isinstance(n_intents, bool)
+    except (TypeError, ValueError, OverflowError):  # None, a string, inf
+        whole = False
+    if not whole or n_intents < 1:
+        raise ValueError(f"belief arbitration needs an integer >= 1 intents, got {n_intents!r}")
+    if n_intents == 1:
+        return scalar_or_array(np.ones_like(p_star))
     return scalar_or_array(_alpha_belief(p_star, n_intents))
 
 
@@ -143,5 +163,5 @@ def _alpha_distance(distance, D):
 
 
 def _alpha_belief(p_star, n_intents):
-    """:func:`alpha_belief` on checked input (n_intents >= 2)."""
+    """:func:`alpha_belief` on checked input (n_intents >= 2; 1 intent gives alpha = 1)."""
     return np.clip(1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0), 0.0, 1.0)

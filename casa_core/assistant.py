@@ -83,13 +83,15 @@ class Assistant:
     arbitration : {"confidence", "distance", "belief", "none"}
         "confidence" is CASA (alpha = min(1, 1/beta_hat*)); "distance" is the
         policy-blending baseline PBA (beta fixed at 1, alpha = min(1, d/D));
-        "belief" arbitrates on P(theta*|xi); "none" is direct teleoperation (NA).
+        "belief" arbitrates on P(theta*|xi) (with a single intent, whose belief is 1
+        by construction, the user keeps full control: see
+        :func:`casa_core.arbitration.alpha_belief`); "none" is direct teleoperation (NA).
     k : int, default K
         Action dimensionality (7 joint velocities).
     lam : float, default LAM
         Exponential prior rate on beta (MAP estimate; the original used 4).
     epsilon : float, default EPSILON
-        Misspecification threshold on beta_hat (1.0 as in related work).
+        Misspecification threshold on beta_hat (1.0 as in related work), > 0.
     pba_distance : float, default PBA_DISTANCE
         D of distance arbitration, metres (0.55 in the original).
     subopt_scale : float, default SUBOPT_SCALE
@@ -166,10 +168,16 @@ class Assistant:
         require_positive("Assistant", k=k, pba_distance=pba_distance, subopt_scale=subopt_scale)
         require_positive("Assistant", horizon=horizon, dt=dt, tick=tick)
         require_positive("Assistant", speed=speed, rot_speed=rot_speed)
-        if not (np.isfinite(lam) and lam >= 0):
+        # beta_hat >= 0: an epsilon <= 0 (or NaN) would never detect misspecification.
+        require_positive("Assistant", epsilon=epsilon)
+        if int(k) != k:
+            raise ValueError(f"k of Assistant must be an integer, got {k!r}")
+        try:
+            lam_ok = bool(np.isfinite(lam) and lam >= 0)
+        except TypeError:  # not a number at all
+            lam_ok = False
+        if not lam_ok:
             raise ValueError(f"lam of Assistant must be a number >= 0, got {lam!r}")
-        if np.isnan(epsilon):
-            raise ValueError("epsilon of Assistant must be a number, got nan")
         self.arbitration, self.evidence = arbitration, evidence
         self.k, self.lam, self.epsilon = k, lam, epsilon
         self.pba_distance, self.subopt_scale = pba_distance, subopt_scale
@@ -194,8 +202,8 @@ class Assistant:
     def reset(self, state) -> None:
         """Start a trial at ``state``: no evidence, costs measured from here."""
         state = np.asarray(state, dtype=float)
-        if not np.isfinite(state).all():
-            raise ValueError(f"start state must be finite, got {state!r}")
+        if state.ndim != 1 or not np.isfinite(state).all():
+            raise ValueError(f"start state must be finite (one vector), got {state!r}")
         self._steps = 0
         self._last_state = state
         self._prefix = np.zeros(len(self.intents))
@@ -210,8 +218,8 @@ class Assistant:
         """Observe the state reached one inference step (``dt``) after the last one."""
         self._require_reset("update")
         state = np.asarray(state, dtype=float)
-        if not np.isfinite(state).all():
-            raise ValueError(f"state must be finite, got {state!r}")
+        if state.shape != self._last_state.shape or not np.isfinite(state).all():
+            raise ValueError(f"state must be finite, of shape {self._last_state.shape}: {state!r}")
         self._steps += 1
         t = self._steps
         time_left = max(self.horizon - t * self.dt, 0.0)
@@ -241,7 +249,8 @@ class Assistant:
             "distance": float(
                 _alpha_distance(self.intents[star].distance(state), self.pba_distance)
             ),
-            "belief": float(_alpha_belief(float(belief[star]), n)) if n > 1 else 0.0,
+            # One intent: a belief of 1 by construction, no evidence; the user keeps control.
+            "belief": float(_alpha_belief(float(belief[star]), n)) if n > 1 else 1.0,
         }
         alpha = 1.0 if self.arbitration == "none" else alphas[self.arbitration]
         if star != self._plan_intent:

@@ -94,6 +94,8 @@ def beta_hat(subopt, t, k, lam=0.0):
     2.0
     >>> beta_hat(5.0, t=0, k=7)
     0.0
+    >>> beta_hat(-0.0, t=1, k=7, lam=-0.0)  # no suboptimality and no prior: certain
+    inf
     """
     subopt = as_finite_or_inf("subopt", subopt, nonnegative=True)
     t = as_finite_or_inf("t", t, nonnegative=True)
@@ -109,5 +111,8 @@ def beta_hat(subopt, t, k, lam=0.0):
 def _beta_hat(subopt: np.ndarray, t, k, lam) -> np.ndarray:
     """:func:`beta_hat` on checked input (the assistant's per-step path)."""
     evidence = t * k
+    # + 0.0 turns -0.0 (lam = subopt = -0.0 pass the checks) into 0.0, whose quotient is
+    # +inf; every other value is unchanged.
+    denominator = 2.0 * (lam + subopt) + 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(evidence == 0, 0.0, evidence / (2.0 * (lam + subopt)))
+        return np.where(evidence == 0, 0.0, evidence / denominator)

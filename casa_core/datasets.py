@@ -12,9 +12,9 @@ through :mod:`casa_core.io`). It becomes four tables, the contract with users
 - ``validation.csv``: every file checked, its status and each problem,
   columns :data:`VALIDATION_COLUMNS`.
 
-Rows are sorted on their identifying columns and written with
-:func:`casa_core.io.atomic.write_csv`, atomically, so the same raw files give
-the same bytes. Paths in the tables are relative to the dataset folder.
+Rows are sorted on their identifying columns and written atomically
+(:mod:`casa_core.io.atomic`; the first three together, all or none), so the same
+raw files give the same bytes. Paths in the tables are relative to the dataset folder.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import pandas as pd
 
 from casa_core import metrics, tasks
 from casa_core.io import CONDITION_KEYS, FileCheck, Problem, check_paths
-from casa_core.io.atomic import write_csv
+from casa_core.io.atomic import atomic_paths, frame_to_csv_text, write_csv
 from casa_core.io.contract import INTENT_PREFIXES
 from casa_core.scene import Scene
 
@@ -121,13 +121,16 @@ def validation_table(
     rows = []
     for check in checks:
         file = _relative(check.file, root)
-        if check.kind == "other":
+        if check.kind == "other" and not check.problems:
             rows.append((file, check.kind, "ignored", "", "", "not a .csv or .json: not read"))
-        elif check.ok:
+        elif not check.problems:
             rows.append((file, check.kind, "ok", "", "", ""))
         else:
-            status = "excluded" if allow_invalid else "invalid"
+            # A warning's row says "warning"; an error's, what happens to the file (for a
+            # surveys.csv, to the lines the problem names).
+            error_status = "excluded" if allow_invalid else "invalid"
             for problem in check.problems:
+                status = error_status if problem.is_error else "warning"
                 where = problem.where
                 if _relative(Path(problem.file), root) != file:
                     # The problem is in the trial's other file (its .json).
@@ -170,12 +173,14 @@ def build_tables(
     root = Path(raw_dir)
     dataset = dataset or root.resolve().name
     checks = check_dataset(root)
-    problems = [p for check in checks for p in check.problems]
+    problems = [p for check in checks for p in check.errors]
     if problems and not allow_invalid:
         raise DatasetInvalid(dataset, problems)
     good = [check for check in checks if check.ok]
     trials, steps = _trials_and_steps([c for c in good if c.kind == "trial"], root, scene, dataset)
-    likert = _likert([c for c in good if c.kind == "surveys"], trials, dataset)
+    # A surveys.csv's frame holds its good rows: one bad answer does not drop the others.
+    surveys = [c for c in checks if c.kind == "surveys" and c.frame is not None]
+    likert = _likert(surveys, trials, dataset)
     return DatasetTables(
         trials, steps, likert, validation_table(checks, root, allow_invalid=allow_invalid)
     )
@@ -286,12 +291,18 @@ def read_table(path: Path | str) -> pd.DataFrame:
 
 
 def write_tables(tables: DatasetTables, out_dir: Path | str) -> list[Path]:
-    """Write ``trials.csv``, ``steps.csv`` and ``likert.csv`` atomically; return their paths."""
-    out_dir = Path(out_dir)
-    written = []
-    for name in ("trials", "steps", "likert"):
-        written.append(write_csv(out_dir / f"{name}.csv", getattr(tables, name)))
-    return written
+    """Write ``trials.csv``, ``steps.csv`` and ``likert.csv`` together; return their paths.
+
+    The three belong together: all are written to temporary files first and renamed
+    only when all are written, so a full disk or a killed run leaves the old three.
+    """
+    names = ("trials", "steps", "likert")
+    paths = [Path(out_dir) / f"{name}.csv" for name in names]
+    texts = [frame_to_csv_text(getattr(tables, name)) for name in names]
+    with atomic_paths(*paths) as temporaries:
+        for tmp, text in zip(temporaries, texts, strict=True):
+            tmp.write_bytes(text.encode("utf-8"))
+    return paths
 
 
 def process_dataset(

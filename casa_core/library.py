@@ -57,28 +57,21 @@ from casa_core.planning import PlannerConfig
 FORMAT = "casa-intent"
 VERSION = 2  # 2: cost_offset
 SUFFIX = ".intent.json"
-REQUIRED_KEYS = (
-    "format",
-    "version",
-    "name",
-    "task",
-    "participant",
-    "seed",
-    "features",
-    "objects",
-    "network",
-    "cost_scale",
-    "cost_offset",
-    "length_scale",
-    "planner",
-    "guides",
-    "demo_hashes",
-    "irl_config",
-    "history",
-    "weights",
-    "checksum",
+#: Every key of a file, in the order the format lists them.
+REQUIRED_KEYS = tuple(
+    """format version name task participant seed features objects network cost_scale
+    cost_offset length_scale planner guides demo_hashes irl_config history weights
+    checksum""".split()
 )
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+#: The keys' JSON types, checked on reading: (what the message says, Python type, keys).
+_KINDS = (
+    ("a JSON string", str, ("name", "task", "participant")),
+    ("a JSON integer", int, ("seed",)),
+    ("a JSON list", list, ("demo_hashes", "history", "objects", "guides")),
+    ("a JSON object", dict, ("network", "planner", "weights")),
+    ("a JSON number", (int, float), ("cost_scale", "cost_offset", "length_scale")),
+)
 
 
 class LibraryError(ValueError):
@@ -244,8 +237,10 @@ def load_intent(path: Path | str) -> LibraryEntry:
     except (OSError, UnicodeDecodeError) as error:
         raise LibraryError(path, "readable", f"cannot be read: {error}") from None
     try:
-        payload = json.loads(text)
-    except json.JSONDecodeError as error:
+        payload = json.loads(text, parse_constant=_finite_float, parse_float=_finite_float)
+    except _NotFinite as error:
+        raise LibraryError(path, "finite", f"{error}: every number must be finite") from None
+    except (json.JSONDecodeError, RecursionError) as error:
         raise LibraryError(
             path, "json", f"is not valid JSON (truncated or damaged?): {error}"
         ) from None
@@ -271,23 +266,12 @@ def load_intent(path: Path | str) -> LibraryEntry:
         "checksum",
         "checksum does not match the content: the file was damaged or edited",
     )
-    types = {
-        "name": str,
-        "task": str,
-        "participant": str,
-        "seed": int,
-        "demo_hashes": list,
-        "history": list,
-        "objects": list,
-        "guides": list,
-    }
-    for key, kind in types.items():
-        _require(
-            path,
-            isinstance(payload[key], kind),
-            "content",
-            f"{key} must be a JSON {kind.__name__}, got {type(payload[key]).__name__}",
-        )
+    for expected, kind, keys in _KINDS:
+        for key in keys:
+            value = payload[key]
+            # A JSON true is a Python int: refused where a number is expected.
+            ok = isinstance(value, kind) and not isinstance(value, bool)
+            _require(path, ok, "content", f"{key} must be {expected}, got {type(value).__name__}")
     _require(
         path,
         all(isinstance(record, dict) for record in payload["history"]),
@@ -295,15 +279,45 @@ def load_intent(path: Path | str) -> LibraryEntry:
         "history must be a list of objects",
     )
     try:
-        intent = _build_intent(payload)
-    except (KeyError, TypeError, ValueError, RuntimeError) as error:
+        intent = _build_intent(path, payload)
+    except LibraryError:
+        raise
+    except KeyError as error:
+        raise LibraryError(path, "required-key", f"an inner object lacks key {error}") from None
+    except (TypeError, ValueError, RuntimeError, AttributeError, ArithmeticError) as error:
         raise LibraryError(path, "content", f"does not describe a usable intent: {error}") from None
     metadata = {k: v for k, v in payload.items() if k not in ("weights", "checksum")}
     return LibraryEntry(path=path, intent=intent, metadata=metadata)
 
 
-def _build_intent(payload: dict) -> NeuralIntent:
+class _NotFinite(ValueError):
+    """A number of a library file that is NaN or infinite."""
+
+
+def _finite_float(text: str) -> float:
+    # json reads NaN, Infinity and -Infinity, which are not JSON, and 1e999 as inf.
+    value = float(text)
+    if not np.isfinite(value):
+        raise _NotFinite(f"holds {text}")
+    return value
+
+
+def _decode_weights(path: Path, stored: dict) -> dict[str, np.ndarray]:
+    arrays = {}
+    for key, entry in stored.items():
+        data = base64.b64decode(entry["data"], validate=True)
+        array = np.frombuffer(data, dtype=np.dtype(entry["dtype"]).newbyteorder("<"))
+        array = array.reshape(entry["shape"]).astype(np.float32)
+        if not np.isfinite(array).all():
+            raise LibraryError(path, "finite", f"weight {key} is not finite")
+        arrays[key] = array
+    return arrays
+
+
+def _build_intent(path: Path, payload: dict) -> NeuralIntent:
     object_names = [obj["name"] for obj in payload["objects"]]
+    if not all(isinstance(name, str) for name in object_names):
+        raise ValueError(f"object names {object_names} must be strings")
     if len(set(object_names)) != len(object_names):
         raise ValueError(f"objects {object_names} repeat a name")
     objects = {obj["name"]: obj["position"] for obj in payload["objects"]}
@@ -312,27 +326,26 @@ def _build_intent(payload: dict) -> NeuralIntent:
     spec = payload["network"]
     if spec["inputs"] != len(payload["features"]):
         raise ValueError(f"network has {spec['inputs']} inputs for {len(payload['features'])}")
+    arrays = _decode_weights(path, payload["weights"])
+    hidden = spec["hidden"]
+    # hidden**2 weights: a size the stored data cannot fill is refused before allocating it.
+    if not (isinstance(hidden, int) and 1 <= hidden**2 <= sum(a.size for a in arrays.values())):
+        raise ValueError(f"network hidden={hidden!r} does not fit the stored weights")
     network = cost_network(
-        spec["inputs"], hidden=spec["hidden"], negative_slope=spec["negative_slope"], seed=0
+        spec["inputs"], hidden=hidden, negative_slope=spec["negative_slope"], seed=0
     )
     expected = network.state_dict()
-    stored = payload["weights"]
-    if set(stored) != set(expected):
-        raise ValueError(f"weights {sorted(stored)} do not match the network {sorted(expected)}")
+    if set(arrays) != set(expected):
+        raise ValueError(f"weights {sorted(arrays)} do not match the network {sorted(expected)}")
     state = {}
-    for key, entry in stored.items():
-        data = base64.b64decode(entry["data"], validate=True)
-        array = np.frombuffer(data, dtype=np.dtype(entry["dtype"]).newbyteorder("<"))
-        array = array.reshape(entry["shape"]).astype(np.float32)
+    for key, array in arrays.items():
         if tuple(array.shape) != tuple(expected[key].shape):
             raise ValueError(
                 f"weight {key} has shape {array.shape}, expected {tuple(expected[key].shape)}"
             )
-        if not np.isfinite(array).all():
-            raise ValueError(f"weight {key} is not finite")
         state[key] = torch.from_numpy(array.copy())
     network.load_state_dict(state)
-    return NeuralIntent(
+    intent = NeuralIntent(
         payload["name"],
         network,
         objects=objects,
@@ -342,6 +355,14 @@ def _build_intent(payload: dict) -> NeuralIntent:
         guides=[np.asarray(g, dtype=float) for g in payload["guides"]],
         cost_offset=payload["cost_offset"],
     )
+    # Values in range can still overflow the network (a tiny length_scale): its cost at the
+    # objects and along the guides must be finite, or inference would later meet NaN.
+    probe = np.vstack(
+        [np.column_stack([intent.objects, np.zeros(len(intent.objects))]), *intent.guides]
+    )
+    if not np.isfinite(intent.costs_of(probe)).all():
+        raise LibraryError(path, "finite", "the cost is not finite at the objects or the guides")
+    return intent
 
 
 def find_libraries(folder: Path | str) -> list[Path]:

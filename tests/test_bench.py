@@ -97,3 +97,78 @@ def test_table_marks_unassisted_rows_and_fits_without_them():
 def test_table_explains_three_goals_no_faster_than_four():
     table = bench.format_table(scaling_results(131.0, 130.0))
     assert "3 goal intents took no less than 4 (131.0 vs 130.0 us)" in table
+
+
+# The command line's arguments: every numeric option is range-checked by argparse.
+
+
+def test_every_numeric_option_is_range_checked():
+    from casa_core.cli import _options, all_parsers, build_parser
+
+    checked = {_options.positive_int, _options.nonnegative_int, _options.positive_float}
+    typed = [
+        (parser.prog, action.option_strings, action.type)
+        for parser in all_parsers(build_parser())
+        for action in parser._actions
+        if action.type is not None
+    ]
+    assert typed, "no numeric option found"
+    assert [t for t in typed if t[2] not in checked] == []  # a bare int or float accepts -1, nan
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["bench", "--seed", "-1"], "argument --seed: must be an integer >= 0, got '-1'"),
+        (["bench", "--seed", "1.5"], "argument --seed: must be an integer >= 0, got '1.5'"),
+        (
+            ["simulate", "before", "--participant", "0", "--out", "x"],
+            "argument --participant: must be an integer >= 1, got '0'",
+        ),
+        (
+            ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "p",
+             "--out", "x", "--max-duration", "nan"],
+            "argument --max-duration: must be a finite number > 0, got 'nan'",
+        ),
+        (
+            ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "p",
+             "--out", "x", "--epsilon", "0"],
+            "argument --epsilon: must be a finite number > 0, got '0'",
+        ),
+        (
+            ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "p",
+             "--out", "x", "--demonstrations", "-2"],
+            "argument --demonstrations: must be an integer >= 0, got '-2'",
+        ),
+        (
+            ["figure", "case_study", "--steps", "s.csv", "--out", "x", "--epsilon", "inf"],
+            "argument --epsilon: must be a finite number > 0, got 'inf'",
+        ),
+    ],
+)  # fmt: skip
+def test_out_of_range_options_end_with_a_usage_error(argv, expected, capsys):
+    from casa_core.cli import main
+
+    with pytest.raises(SystemExit) as done:  # argparse: message and exit status 2, no run
+        main(argv)
+    assert done.value.code == 2
+    assert expected in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["bench"],
+        ["learn", "--demos", "d", "--name", "x", "--library", "l"],
+        ["teleop", "--task", "known_goal", "--method", "NA", "--participant", "p", "--out", "o"],
+        ["figure", "scene", "--out", "o"],
+        ["process", "raw", "--out", "o"],
+    ],
+)
+def test_a_missing_scene_file_is_named_without_a_traceback(argv, tmp_path, capsys):
+    from casa_core.cli import main
+
+    missing = tmp_path / "no-scene.yaml"
+    code = main([*argv, "--scene", str(missing)])
+    assert code in (1, 2)
+    assert f"cannot read the scene {missing}" in capsys.readouterr().err

@@ -123,7 +123,8 @@ def test_allow_invalid_excludes_bad_files_and_lists_them(tmp_path):
     before = _digests(tmp_path / "ds")
     tables = datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE, allow_invalid=True)
     assert len(tables.trials) == 2 * 11 - 2
-    assert len(tables.likert) == 0  # the whole bad surveys.csv is excluded
+    # Only the bad answer is left out: 2 participants x 11 conditions x 3 questions remain.
+    assert len(tables.likert) == 2 * 11 * 3
     assert pd.read_csv(tmp_path / "out" / "likert.csv").columns.tolist() == list(
         datasets.LIKERT_COLUMNS
     )

@@ -170,8 +170,24 @@ def test_alpha_belief_is_one_for_uniform_and_zero_for_certain_belief():
     assert alpha_belief(1.0, 3) == 0.0
     assert alpha_belief(2 / 3, 3) == pytest.approx(0.5)  # 1 - (2 - 1) / 2
     assert alpha_belief(0.1, 3) == 1.0  # below uniform: clipped
-    with pytest.raises(ValueError, match="at least 2 intents"):
-        alpha_belief(1.0, 1)
+
+
+def test_alpha_belief_with_one_intent_leaves_the_user_in_control():
+    # One intent: P* = 1 = 1/|Theta| is the uniform belief, which gives alpha = 1 (as in
+    # the test above); the formula itself is 0/0. Documented in alpha_belief's docstring.
+    assert alpha_belief(1.0, 1) == 1.0
+    np.testing.assert_array_equal(alpha_belief([1.0, 1.0], 1), [1.0, 1.0])
+    for bad in (0, -1, 2.5, np.nan, None, "3", True):
+        with pytest.raises(ValueError, match="needs an integer >= 1 intents"):
+            alpha_belief(1.0, bad)
+
+
+def test_beta_hat_of_negative_zero_is_plus_infinity():
+    # eq. beta_map with lam = 0 and subopt = 0, t > 0: t k / (2 * 0) = +inf; -0.0 is 0.
+    assert beta_hat(-0.0, 1, 7, lam=-0.0) == np.inf
+    assert beta_hat(0.0, 1, 7, lam=-0.0) == np.inf
+    np.testing.assert_array_equal(beta_hat([-0.0, 0.0, 1.0], 1, 7, lam=-0.0), [np.inf, np.inf, 3.5])
+    assert beta_hat(-0.0, 0, 7, lam=-0.0) == 0.0  # t = 0: no evidence yet
 
 
 @pytest.mark.parametrize("arbitration", [alpha_confidence, lambda x: alpha_distance(x, 0.55)])

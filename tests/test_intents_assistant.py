@@ -171,6 +171,58 @@ def test_assistant_guards():
         assistant.reset([0.0, np.inf, 0.0, 0.0])
 
 
+@pytest.mark.parametrize(
+    ("option", "value", "message"),
+    [
+        # NaN or a threshold <= 0 would silently switch misspecification detection off
+        # (beta_hat >= 0 is never below it); config.schema.yaml asks epsilon > 0 too.
+        ("epsilon", np.nan, "epsilon of Assistant must be a positive number, got nan"),
+        ("epsilon", 0.0, "epsilon of Assistant must be a positive number, got 0.0"),
+        ("epsilon", "high", "epsilon of Assistant must be a positive number, got 'high'"),
+        # a negative speed limit would turn u* away from the goal
+        ("speed", -0.05, "speed of Assistant must be a positive number, got -0.05"),
+        ("rot_speed", np.nan, "rot_speed of Assistant must be a positive number, got nan"),
+        ("k", 7.5, "k of Assistant must be an integer, got 7.5"),
+        ("lam", "4", "lam of Assistant must be a number >= 0, got '4'"),
+        ("lam", np.nan, "lam of Assistant must be a number >= 0, got nan"),
+    ],
+)
+def test_assistant_refuses_out_of_range_options(option, value, message):
+    with pytest.raises(ValueError, match=message):
+        Assistant([GoalIntent("a", GOAL)], **{option: value})
+
+
+def test_goal_intent_refuses_a_negative_speed():
+    with pytest.raises(ValueError, match="speed of intent 'a' must be a positive number"):
+        GoalIntent("a", GOAL, speed=-0.05)
+
+
+def test_belief_arbitration_with_one_intent_leaves_the_user_in_control():
+    # A single intent has belief 1 by construction (no alternative): alpha = 1, as
+    # casa_core.arbitration.alpha_belief documents, not the robot's full control.
+    def one_intent(arbitration):
+        assistant = Assistant([GoalIntent("green", GOAL)], arbitration=arbitration)
+        assistant.reset(START)
+        return assistant
+
+    confidence, belief = one_intent("confidence"), one_intent("belief")
+    for state in straight_line(GOAL, 6)[1:]:
+        by_confidence, by_belief = confidence.update(state), belief.update(state)
+        assert by_belief.belief == {"green": 1.0} and by_belief.alpha == 1.0
+        assert by_confidence.alpha_by_arbitration["belief"] == 1.0
+    assert by_confidence.alpha < 1.0  # confidence arbitration still assists a confident user
+    user = np.array([0.05, 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(belief.act(state, user), user)
+
+
+def test_assistant_refuses_a_state_of_another_shape():
+    assistant = make_assistant()
+    with pytest.raises(ValueError, match="start state must be finite"):
+        assistant.reset(np.zeros((2, 4)))
+    with pytest.raises(ValueError, match=r"of shape \(4,\)"):
+        assistant.update([0.0, 0.0, 0.0])
+
+
 def test_assistant_needs_reset_before_a_trial():
     assistant = Assistant([GoalIntent("a", GOAL)])
     assert assistant.latest is None

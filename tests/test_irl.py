@@ -232,6 +232,21 @@ def test_bad_demonstrations_are_named():
         learn([], "x")
     with pytest.raises(ValueError, match="'x'.*strictly increasing"):
         learn([np.zeros((3, 5))], "x")
+    # Shape and NaN are checked before the horizon is sized from the demonstrations' t.
+    with pytest.raises(ValueError, match=r"'x'.*\(n >= 2, 5\).*got \(5,\)"):
+        learn([np.zeros(5)], "x")
+    with pytest.raises(ValueError, match="'x'.*NaN or infinite"):
+        learn([np.full((3, 5), np.nan)], "x")
+
+
+@pytest.mark.parametrize("value", [0.0, -0.1, np.nan, np.inf])
+def test_a_neural_intent_needs_positive_scales(value):
+    # length_scale divides the features: 0 gave NaN costs-to-go; cost_scale <= 0 no cost.
+    network = cost_network(16, hidden=8, negative_slope=0.01, seed=0)
+    for scale in ("cost_scale", "length_scale"):
+        scales = {"cost_scale": 1.0, "length_scale": 0.1, scale: value}
+        with pytest.raises(ValueError, match=f"{scale} of intent 'n' must be a positive number"):
+            NeuralIntent("n", network, objects={"red": [0.4, 0.2, 0.1]}, **scales)
 
 
 def test_bad_objects_are_named():

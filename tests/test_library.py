@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import base64
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -18,6 +20,7 @@ from casa_core.scene import load_scene
 from casa_core.study.learn_from_logs import read_demonstrations
 from casa_core.study.learning_evidence import scene_objects
 
+ROOT = Path(__file__).resolve().parents[1]
 OBJECTS = scene_objects(load_scene())
 DEMOS = [np.column_stack([np.arange(4) * 0.5, np.full((4, 3), 0.4), np.zeros(4)])]
 HISTORY = [{"iteration": 1, "loss": 1.5, "end_moved_m": None, "converged": False}]
@@ -85,8 +88,49 @@ def test_demo_hash_changes_with_the_demo():
     assert library.demo_hash(DEMOS[0]) == library.demo_hash(DEMOS[0].copy())
 
 
+def resealed(payload):
+    """``payload`` with a checksum that matches it: damage the checksum cannot see."""
+    payload.pop("checksum", None)
+    payload["checksum"] = library.hashlib.sha256(library._canonical(payload)).hexdigest()
+    return json.dumps(payload)
+
+
+#: Damage that passes the checksum (the file was written so) but makes the intent unusable.
+RESEALED = {
+    "nan-weights": lambda p: p["weights"]["0.bias"].update(
+        data=base64.b64encode(np.full(p["network"]["hidden"], np.nan, "<f4").tobytes()).decode()
+    ),
+    # length_scale divides the features: 0 loaded before and gave NaN costs-to-go later.
+    "length-scale-0": lambda p: p.update(length_scale=0.0),
+    "tiny-length-scale": lambda p: p.update(length_scale=1e-300),
+    "cost-scale-negative": lambda p: p.update(cost_scale=-1.0),
+    "inner-key": lambda p: p["network"].pop("inputs"),
+    "seed-bool": lambda p: p.update(seed=True),
+    "huge-hidden": lambda p: p["network"].update(hidden=10**9),  # refused, not allocated
+    "planner": lambda p: p["planner"].update(dt=-0.5),
+}
+
+
 def damage(path, how):
     text = path.read_text()
+    if how in RESEALED:
+        payload = json.loads(text)
+        RESEALED[how](payload)
+        path.write_text(resealed(payload))
+        return
+    if how == "nan":
+        # A NaN written by a tool that allows it (json.dumps does): not JSON, not finite.
+        payload = json.loads(text)
+        payload["cost_scale"] = float("nan")
+        path.write_text(json.dumps(payload))
+    elif how == "overflow":
+        path.write_text(text.replace('"cost_offset": 1.25', '"cost_offset": 1e999'))
+    elif how == "flipped":
+        # One flipped bit in the weights' base64, as a bad disk or copy would leave it.
+        data = bytearray(path.read_bytes())
+        at = data.index(b'"data": "') + 20
+        data[at] ^= 0x01
+        path.write_bytes(bytes(data))
     if how == "truncated":
         path.write_text(text[: len(text) // 2])
     elif how == "edited":
@@ -128,6 +172,17 @@ def damage(path, how):
         ("version", "version"),
         ("missing", "required-key"),
         ("binary", "readable"),
+        ("nan", "finite"),
+        ("overflow", "finite"),
+        ("flipped", "checksum"),
+        ("nan-weights", "finite"),
+        ("length-scale-0", "content"),
+        ("tiny-length-scale", "finite"),
+        ("cost-scale-negative", "content"),
+        ("inner-key", "required-key"),
+        ("seed-bool", "content"),
+        ("huge-hidden", "content"),
+        ("planner", "content"),
     ],
 )
 def test_damaged_files_are_named_and_do_not_take_the_others_down(tmp_path, how, rule):
@@ -260,3 +315,122 @@ def test_cli_list_says_when_nothing_is_found_and_exits_1(tmp_path):
     missing = run_casa("library", "list", str(tmp_path / "nope"))
     assert missing.returncode == 1 and "is not a folder" in missing.stderr
     assert "Traceback" not in listed.stderr + missing.stderr
+
+
+def test_cli_list_reports_a_nan_file_and_lists_the_good_ones(tmp_path):
+    # "bad" sorts before "good": the damaged file must not hide what follows it.
+    damage(save(tmp_path, make_intent("bad")), "nan")
+    save(tmp_path, make_intent("good"))
+    listed = run_casa("library", "list", str(tmp_path))
+    assert listed.returncode == 1 and "Traceback" not in listed.stderr
+    assert [line.split("\t")[0] for line in listed.stdout.splitlines()] == ["good"]
+    assert f"{tmp_path / 'bad.intent.json'}: [finite] holds NaN" in listed.stderr
+
+
+def damaged_library(folder, how="length-scale-0"):
+    """A library of one good intent and one damaged one; returns the damaged file."""
+    save(folder, make_intent("good"))
+    bad = save(folder, make_intent("bad"))
+    damage(bad, how)
+    return bad
+
+
+@pytest.mark.parametrize(("how", "rule"), [("length-scale-0", "content"), ("truncated", "json")])
+def test_simulate_after_names_the_damaged_intent_file(tmp_path, capsys, how, rule):
+    from casa_core.cli import main
+
+    bad = damaged_library(tmp_path / "lib", how)
+    code = main(
+        ["simulate", "after", "--config", str(ROOT / "config" / "config.yaml"),
+         "--participant", "1", "--out", str(tmp_path / "after"), "--before", str(tmp_path),
+         "--library", str(tmp_path / "lib")]
+    )  # fmt: skip
+    assert code == 2
+    assert f"casa simulate after: {bad}: [{rule}]" in capsys.readouterr().err
+    assert not (tmp_path / "after").exists()  # nothing simulated with a damaged library
+
+
+def test_simulate_stages_say_which_option_they_need(capsys):
+    from casa_core.cli import main
+
+    assert main(["simulate", "after", "--out", "x"]) == 2
+    assert "casa simulate after: needs --before, --library" in capsys.readouterr().err
+
+
+def test_teleop_names_a_damaged_intent_file_before_opening_a_window(tmp_path, capsys):
+    from casa_core.cli import main
+
+    bad = damaged_library(tmp_path, "flipped")
+    code = main(
+        ["teleop", "--task", "unknown_goal", "--method", "CASA", "--participant", "p01",
+         "--out", str(tmp_path / "out"), "--intent", str(bad)]
+    )  # fmt: skip
+    assert code == 2
+    assert f"casa teleop: {bad}: [checksum]" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_learn_refuses_zero_iterations_and_a_negative_seed(tmp_path, capsys):
+    from casa_core.cli import main
+
+    common = ["learn", "--demos", str(tmp_path), "--name", "x", "--library", str(tmp_path)]
+    for option, value, expected in (
+        ("--max-iterations", "0", "argument --max-iterations: must be an integer >= 1, got '0'"),
+        ("--seed", "-1", "argument --seed: must be an integer >= 0, got '-1'"),
+    ):
+        with pytest.raises(SystemExit) as done:  # argparse's usage error, exit status 2
+            main([*common, option, value])
+        assert done.value.code == 2 and expected in capsys.readouterr().err
+
+
+def test_irl_config_refuses_settings_out_of_range():
+    # max_iterations=0 ran no iteration and failed on an empty history.
+    for settings, message in (
+        ({"max_iterations": 0}, "IRLConfig.max_iterations must be an integer >= 1, got 0"),
+        ({"min_iterations": -1}, "IRLConfig.min_iterations must be an integer >= 0"),
+        ({"hidden": 0}, "hidden of IRLConfig must be a positive number, got 0"),
+        ({"length_scale": 0.0}, "length_scale of IRLConfig must be a positive number"),
+        ({"lr": float("nan")}, "lr of IRLConfig must be a positive number, got nan"),
+        ({"weight_decay": -1e-3}, "IRLConfig.weight_decay must be a finite number >= 0"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            IRLConfig(**settings)
+
+
+def test_cli_learn_names_a_latin1_demonstration_file(tmp_path, capsys):
+    from casa_core.cli import main
+
+    write_demo_logs(tmp_path, n=1)
+    csv = tmp_path / "demo0.csv"
+    csv.write_bytes(csv.read_bytes().replace(b"y+", "\u00e9".encode("latin-1"), 1))
+    code = main(["learn", "--demos", str(tmp_path), "--name", "x", "--library", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 1 and f"casa learn: {csv}" in err and "utf-8" in err.lower()
+    assert not (tmp_path / "x.intent.json").exists()
+
+
+def test_no_flipped_bit_gives_a_traceback_or_another_intent(tmp_path):
+    # 300 single-bit flips at random places (seeded): each is refused with a LibraryError,
+    # or the file still means the same thing (e.g. 1e-05 read as 1E-05) and loads the same.
+    original = save(tmp_path, make_intent("flip"))
+    pristine = original.read_bytes()
+    reference = library.load_intent(original)
+    rng = np.random.default_rng(15)
+    outcomes = {}
+    places = rng.integers(len(pristine), size=300)
+    for at, bit in zip(places, rng.integers(8, size=300), strict=True):
+        data = bytearray(pristine)
+        data[at] ^= 1 << bit
+        original.write_bytes(bytes(data))
+        try:
+            entry = library.load_intent(original)
+        except library.LibraryError as error:
+            outcomes[error.rule] = outcomes.get(error.rule, 0) + 1
+            continue
+        assert entry.metadata == reference.metadata
+        parameters = zip(
+            entry.intent.network.parameters(), reference.intent.network.parameters(), strict=True
+        )
+        assert all(torch.equal(a, b) for a, b in parameters)
+    assert set(outcomes) <= {"readable", "json", "checksum", "format", "version", "required-key"}
+    assert sum(outcomes.values()) >= 290  # nearly every flip changes the meaning

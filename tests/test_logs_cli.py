@@ -113,3 +113,36 @@ def test_every_command_and_subcommand_help_ends_with_an_example_that_parses():
         for argv in examples:
             if "--help" not in argv:
                 build_parser().parse_args(argv)  # argparse exits on a bad example
+
+
+def test_warnings_are_printed_and_exit_0(tmp_path, capsys):
+    (stem,) = write_dataset(
+        tmp_path / "ds",
+        participants=("p01",),
+        conditions=[("known_goal", "NA", "no_misspecification")],
+        surveys=False,
+    )
+    csv_path = stem.with_name(stem.name + ".csv")
+    table = pd.read_csv(csv_path, keep_default_na=False)
+    table.loc[len(table) // 2 :, "t"] += 0.05  # a dropped tick
+    csv_path.write_text(table.to_csv(index=False))
+    report = tmp_path / "validation.csv"
+    assert main(["validate", str(tmp_path / "ds"), "--report", str(report)]) == 0
+    err = capsys.readouterr().err
+    assert f"{csv_path}: column 't', line {len(table) // 2 + 2}: warning [tick-irregular]" in err
+    assert "1 file(s) checked, 0 invalid, 1 problem(s) (1 warning(s))" in err
+    rows = datasets.read_table(report)
+    assert rows[["status", "rule"]].values.tolist() == [["warning", "tick-irregular"]]
+
+
+def test_latin1_files_are_a_message_not_a_traceback(tmp_path, capsys):
+    (stem,) = write_dataset(
+        tmp_path / "ds",
+        participants=("p01",),
+        conditions=[("known_goal", "NA", "no_misspecification")],
+        surveys=False,
+    )
+    csv_path = stem.with_name(stem.name + ".csv")
+    csv_path.write_bytes(csv_path.read_bytes() + "0.0,0,0,0,0,é\n".encode("latin-1"))
+    assert main(["validate", str(tmp_path / "ds")]) == 1
+    assert f"{csv_path}: line " in capsys.readouterr().err

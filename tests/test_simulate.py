@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from casa_core.config import load_config
 from casa_core.io import read_trial, validate_paths
@@ -45,3 +46,31 @@ def test_before_learning_writes_valid_logs_for_the_whole_protocol(tmp_path):
             assert (again / stem.name).with_suffix(suffix).read_bytes() == stem.with_suffix(
                 suffix
             ).read_bytes()
+
+
+def test_a_participant_index_below_zero_is_refused_before_simulating(tmp_path):
+    # Indices are 0-based (casa simulate's --participant is 1-based); -1 reached numpy's
+    # seeding and failed there with "expected non-negative integer".
+    for call in (
+        lambda: simulate.participant_params(-1, CONFIG["simulation"]),
+        lambda: simulate.participant_id(-1),
+        lambda: simulate.simulate_before_learning(
+            -1, SCENE, simulation=CONFIG["simulation"], out_dir=tmp_path
+        ),
+    ):
+        with pytest.raises(ValueError, match="participant index must be an integer >= 0"):
+            call()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_names_a_missing_scene_file(tmp_path, capsys):
+    from casa_core.cli import main
+
+    overlay = tmp_path / "overlay.yaml"
+    overlay.write_text(f"scene: {tmp_path / 'none.yaml'}\n")
+    code = main(
+        ["simulate", "before", "--config", "config/config.yaml", "--config", str(overlay),
+         "--out", str(tmp_path / "out")]
+    )  # fmt: skip
+    assert code == 2
+    assert f"cannot read the scene {tmp_path / 'none.yaml'}" in capsys.readouterr().err

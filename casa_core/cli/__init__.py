@@ -66,9 +66,11 @@ def all_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser
 
 
 def main(argv: list[str] | None = None) -> int:
+    from casa_core.cli._lifetime import end_with_parent
     from casa_core.config import ConfigError
     from casa_core.scene import SceneError
 
+    end_with_parent()  # a job of the workflow ends with Snakemake (cli/_lifetime.py)
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:

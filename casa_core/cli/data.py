@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 from casa_core.cli._options import example
 
@@ -37,9 +38,12 @@ def _validate(args) -> int:
     from casa_core.io import check_paths
 
     if args.report:
-        checks = datasets.write_validation(
-            args.paths, args.report, allow_invalid=args.allow_invalid
-        )
+        try:
+            checks = datasets.write_validation(
+                args.paths, args.report, allow_invalid=args.allow_invalid
+            )
+        except OSError as error:
+            return cannot_write("validate", Path(args.report).parent, error)
     else:
         checks = check_paths(args.paths)
     problems = [problem for check in checks for problem in check.problems]
@@ -52,12 +56,25 @@ def _validate(args) -> int:
     for check in checks:
         if check.kind == "missing":
             print(f"casa validate: {check.file} does not exist", file=sys.stderr)
+    errors = [problem for problem in problems if problem.is_error]
+    warned = f" ({len(problems) - len(errors)} warning(s))" if len(errors) < len(problems) else ""
     print(
         f"casa validate: {len(files)} file(s) checked, {bad_files} {verdict}, "
-        f"{len(problems)} problem(s)",
+        f"{len(problems)} problem(s){warned}",
         file=sys.stderr,
     )
-    return 1 if problems and not args.allow_invalid else 0
+    return 1 if errors and not args.allow_invalid else 0
+
+
+def cannot_write(command: str, folder, error: OSError) -> int:
+    """Say that ``folder`` could not take the command's outputs (read-only, full); return 1."""
+    reason = error.strerror or str(error)
+    print(
+        f"casa {command}: cannot write into {folder}: {reason} (is the folder writable, "
+        "the disk full?); the files already there are unchanged",
+        file=sys.stderr,
+    )
+    return 1
 
 
 def _add_process(commands) -> None:
@@ -88,12 +105,16 @@ def _process(args) -> int:
         print(f"casa process: {error}", file=sys.stderr)
         return 1
     try:
-        tables = datasets.process_dataset(
-            args.raw, args.out, scene, dataset=args.dataset, allow_invalid=args.allow_invalid
+        tables = datasets.build_tables(
+            args.raw, scene, dataset=args.dataset, allow_invalid=args.allow_invalid
         )
     except datasets.DatasetInvalid as error:
         print(f"casa process: {error}", file=sys.stderr)
         return 1
+    try:
+        datasets.write_tables(tables, args.out)
+    except OSError as error:
+        return cannot_write("process", args.out, error)
     print(
         f"casa process: {len(tables.trials)} trial(s), {len(tables.steps)} step row(s), "
         f"{len(tables.likert)} Likert answer(s) -> {args.out}"
@@ -122,7 +143,7 @@ def _add_stats(commands) -> None:
 
 def _stats(args) -> int:
     from casa_core import datasets, stats
-    from casa_core.io.atomic import atomic_write_text, write_csv
+    from casa_core.io.atomic import atomic_paths, frame_to_csv_text
 
     try:
         # read_table keeps the method "NA" as text (pandas' default would make it missing).
@@ -132,8 +153,15 @@ def _stats(args) -> int:
     except (OSError, ValueError) as error:
         print(f"casa stats: {error}", file=sys.stderr)
         return 1
-    write_csv(args.out_csv, table)
-    atomic_write_text(args.out_md, stats.report_markdown(table))
+    texts = (frame_to_csv_text(table), stats.report_markdown(table))
+    try:
+        # The table and its report belong together: both or neither are replaced.
+        with atomic_paths(args.out_csv, args.out_md) as temporaries:
+            for tmp, text in zip(temporaries, texts, strict=True):
+                tmp.write_bytes(text.encode("utf-8"))
+    except OSError as error:
+        folder = Path(error.filename).parent if error.filename else Path(args.out_csv).parent
+        return cannot_write("stats", folder, error)
     # A test that ran has a p-value or an estimate; a skipped one has neither.
     skipped = int((table["p"].isna() & table["estimate"].isna()).sum())
     print(f"casa stats: {len(table)} row(s) -> {args.out_csv}, {args.out_md}")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from casa_core.cli._options import scene_option
+from casa_core.cli._options import positive_float, scene_option
 
 
 def register(commands) -> None:
@@ -33,7 +33,7 @@ def _add_figure(commands) -> None:
     case_study.add_argument("--steps", required=True, metavar="CSV", help="steps.csv")
     case_study.add_argument("--participant", help="whose runs (default: the first)")
     for sub in (arbitration, case_study):
-        sub.add_argument("--epsilon", type=float, help="draw the confidence threshold")
+        sub.add_argument("--epsilon", type=positive_float, help="draw the confidence threshold")
     scene = figures.add_parser("scene", help="the arm and scene, pybullet-rendered")
     scene_option(scene)
     for sub in (objective, likert, arbitration, case_study, scene):

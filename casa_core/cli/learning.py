@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from casa_core import vocabulary
-from casa_core.cli._options import example, scene_option
+from casa_core.cli._options import example, nonnegative_int, positive_int, scene_option
 
 
 def register(commands) -> None:
@@ -29,7 +29,9 @@ def _add_learn(commands) -> None:
     command.add_argument("--name", required=True, help="name of the new intent")
     command.add_argument("--library", required=True, metavar="DIR", help="the intent library")
     scene_option(command)
-    command.add_argument("--seed", type=int, default=0, help="seed of the network (default 0)")
+    command.add_argument(
+        "--seed", type=nonnegative_int, default=0, help="seed of the network (default 0)"
+    )
     command.add_argument(
         "--task", choices=vocabulary.TASKS, help="only the logs of this task (default: all)"
     )
@@ -41,7 +43,7 @@ def _add_learn(commands) -> None:
     )
     command.add_argument("--participant", help="stored participant (default: from the logs)")
     command.add_argument(
-        "--max-iterations", type=int, metavar="N", help="most IRL iterations (default 50)"
+        "--max-iterations", type=positive_int, metavar="N", help="most IRL iterations (default 50)"
     )
     command.set_defaults(func=_learn)
 

@@ -5,7 +5,12 @@ from __future__ import annotations
 import sys
 
 from casa_core import vocabulary
-from casa_core.cli._options import example, scene_option
+from casa_core.cli._options import (
+    example,
+    nonnegative_int,
+    positive_float,
+    scene_option,
+)
 
 
 def register(commands) -> None:
@@ -37,7 +42,7 @@ def _add_teleop(commands) -> None:
         "--phase", choices=vocabulary.PHASES, help="log phase (default: the task's first)"
     )
     scene_option(command)
-    command.add_argument("--max-duration", type=float, default=60.0, metavar="SECONDS")
+    command.add_argument("--max-duration", type=positive_float, default=60.0, metavar="SECONDS")
     command.add_argument(
         "--intent",
         action="append",
@@ -48,7 +53,7 @@ def _add_teleop(commands) -> None:
     )
     command.add_argument(
         "--demonstrations",
-        type=int,
+        type=nonnegative_int,
         default=DEMONSTRATIONS,
         metavar="N",
         help="after a CASA trial before learning that finds every known intent's confidence "
@@ -56,7 +61,7 @@ def _add_teleop(commands) -> None:
     )
     command.add_argument(
         "--epsilon",
-        type=float,
+        type=positive_float,
         default=EPSILON,
         help="misspecification threshold (default %(default)s)",
     )
@@ -115,7 +120,7 @@ def _add_bench(commands) -> None:
     )
     command.add_argument("--json", action="store_true", help="print the JSON line last")
     scene_option(command)
-    command.add_argument("--seed", type=int, default=0)
+    command.add_argument("--seed", type=nonnegative_int, default=0, help="seed (default 0)")
     command.set_defaults(func=_bench)
 
 

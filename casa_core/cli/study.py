@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import sys
 from typing import TYPE_CHECKING
 
 from casa_core import vocabulary
-from casa_core.cli._options import example
+from casa_core.cli._options import example, positive_int
 
 if TYPE_CHECKING:
     from casa_core.scene import Scene
@@ -62,7 +63,11 @@ def _add_simulate(commands) -> None:
     )
     _add_config_option(command)
     command.add_argument(
-        "--participant", type=int, default=1, metavar="INDEX", help="1-based participant number"
+        "--participant",
+        type=positive_int,
+        default=1,
+        metavar="INDEX",
+        help="1-based participant number",
     )
     command.add_argument("--rows", nargs="*", default=[], help="learning-table: learn CSVs")
     command.add_argument("--out", required=True, help="folder (before/after) or CSV (learn)")
@@ -72,7 +77,26 @@ def _add_simulate(commands) -> None:
     command.set_defaults(func=_simulate)
 
 
+#: The options each stage needs besides --out.
+STAGE_OPTIONS = {"learn": ("before", "task", "library"), "after": ("before", "library")}
+
+
 def _simulate(args) -> int:
+    from casa_core.io import LogError
+
+    missing = [f"--{name}" for name in STAGE_OPTIONS.get(args.stage, ()) if not getattr(args, name)]
+    if missing:
+        print(f"casa simulate {args.stage}: needs {', '.join(missing)}", file=sys.stderr)
+        return 2
+    try:
+        return _run_stage(args)
+    except (LogError, OSError, ValueError) as error:
+        # A damaged intent file (LibraryError, a ValueError) or log names itself and its rule.
+        print(f"casa simulate {args.stage}: {error}", file=sys.stderr)
+        return 2
+
+
+def _run_stage(args) -> int:
     from pathlib import Path
 
     import pandas as pd
@@ -143,13 +167,18 @@ def _add_case_study(commands) -> None:
 def _case_study(args) -> int:
     from pathlib import Path
 
+    from casa_core.io import LogError
     from casa_core.io.atomic import write_csv
     from casa_core.study import simulate
 
     config, scene = _load_config(args)
-    steps, arbitration = simulate.run_case_study(
-        scene, config["case_study"], work_dir=Path(args.work)
-    )
+    try:
+        steps, arbitration = simulate.run_case_study(
+            scene, config["case_study"], work_dir=Path(args.work)
+        )
+    except (LogError, OSError, ValueError) as error:
+        print(f"casa case-study: {error}", file=sys.stderr)
+        return 2
     write_csv(args.steps, steps)
     write_csv(args.arbitration, arbitration)
     print(f"casa case-study: {len(steps)} step row(s), {len(arbitration)} arbitration row(s)")

@@ -37,6 +37,27 @@ def participant_means(
     return grouped.agg(**{value: (value, "mean")}, **{flag: (flag, "max") for flag in flags})
 
 
+#: Beyond this magnitude matplotlib's axis margins and tick labels overflow to infinity.
+LARGEST_DRAWN = 1e300
+
+
+def drawable(values) -> bool:
+    """Whether ``values``, their means and standard errors fit a linear axis (all finite).
+
+    Examples
+    --------
+    >>> drawable([0.5, 2.0]), drawable([1e200, 3e200]), drawable([1e308, 1e308])
+    (True, False, False)
+    """
+    values = np.asarray(values, dtype=float)
+    if values.size == 0:
+        return True
+    with np.errstate(over="ignore"):
+        # Bounds every group's sum of squared deviations, hence its standard error.
+        squares = np.square(np.ptp(values)) * values.size
+    return bool(np.abs(values).max() <= LARGEST_DRAWN and np.isfinite(squares))
+
+
 def wilson_interval(successes: int, trials: int, *, z: float = 1.959964) -> tuple[float, float]:
     """The Wilson score interval of a proportion ``successes / trials`` (95 % by default).
 
@@ -59,7 +80,10 @@ def wilson_interval(successes: int, trials: int, *, z: float = 1.959964) -> tupl
     scale = 1 + z**2 / trials
     centre = (p + z**2 / (2 * trials)) / scale
     half = z / scale * np.sqrt(p * (1 - p) / trials + z**2 / (4 * trials**2))
-    return float(max(0.0, centre - half)), float(min(1.0, centre + half))
+    # The interval holds p exactly (0 of n starts at 0, n of n ends at 1); rounding may
+    # leave it a hair off, which the error bar would draw as a negative length.
+    low, high = min(p, centre - half), max(p, centre + half)
+    return float(max(0.0, low)), float(min(1.0, high))
 
 
 def mean_se(values: np.ndarray) -> tuple[float, float]:

@@ -233,6 +233,11 @@ def objective_figure(
                 if points.empty:
                     style.note_axes(ax, f"no {label.split(' (')[0].lower()} in the data")
                     continue
+                if not _bars.drawable(points[metric]):
+                    largest = float(points[metric].abs().max())
+                    name = label.split(" (")[0].lower()
+                    style.note_axes(ax, f"{name} too large to draw\n(up to {largest:.3g})")
+                    continue
                 tops = _bars.draw_grouped_bars(
                     ax,
                     points,

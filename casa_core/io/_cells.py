@@ -107,7 +107,8 @@ def numeric(cells: pd.DataFrame, column: str, file: str, problems: list) -> pd.S
 
 def in_range(values: pd.Series, column: str, file: str, problems: list, low, high) -> None:
     """Adds a problem for every value of the column outside ``[low, high]``."""
-    outside = values.notna() & ((values < low) | (values > high))
+    # Cells that are not finite numbers are reported once, as finite-number.
+    outside = np.isfinite(values) & ((values < low) | (values > high))
     if outside.any():
         span = f">= {low:g}" if high == math.inf else f"in [{low:g}, {high:g}]"
         first = values[outside].iloc[0]

@@ -60,6 +60,42 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
         raise
 
 
+@contextmanager
+def atomic_paths(*paths: Path | str) -> Iterator[list[Path]]:
+    """Temporary paths beside ``paths``; all renamed to them only when the block succeeds.
+
+    For outputs that belong together (a dataset's tables): an error while writing any
+    of them (a full disk) leaves every target as it was. The renames come last and
+    need no space.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with atomic_paths(folder / "a.csv", folder / "b.csv") as (a, b):
+    ...     _ = a.write_text("1"), b.write_text("2")
+    >>> [p.name for p in sorted(folder.iterdir())]
+    ['a.csv', 'b.csv']
+    """
+    targets = [Path(path) for path in paths]
+    temporaries: list[Path] = []
+    try:
+        for path in targets:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+            os.close(fd)
+            temporaries.append(Path(tmp))
+        yield list(temporaries)
+        for tmp in temporaries:
+            os.chmod(tmp, FILE_MODE)
+        for tmp, path in zip(temporaries, targets, strict=True):
+            os.replace(tmp, path)
+    except BaseException:
+        for tmp in temporaries:
+            tmp.unlink(missing_ok=True)
+        raise
+
+
 def atomic_write_bytes(path: Path | str, data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically; return the path.
 

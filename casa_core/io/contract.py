@@ -34,6 +34,7 @@ from casa_core.vocabulary import (
 )
 
 __all__ = [
+    "BELIEF_SUM_TOLERANCE",
     "COLUMN_RANGES",
     "CONDITION_KEYS",
     "FRAME_OPTIONAL",
@@ -48,7 +49,9 @@ __all__ = [
     "METHODS",
     "PHASES",
     "PHASE_METHOD",
+    "POSITION_BOUND",
     "QUESTIONS",
+    "ROT_BOUND",
     "SCHEMA",
     "SINGLE_TRIAL_PHASES",
     "SOURCES",
@@ -59,6 +62,8 @@ __all__ = [
     "SURVEY_OPTIONAL",
     "TASKS",
     "TASK_PHASES",
+    "TICK",
+    "TICK_TOLERANCE",
     "TIME_RANGE",
 ]
 
@@ -83,10 +88,27 @@ FRAME_OPTIONAL = ("alpha",)
 JOINTS = tuple(f"q{i}" for i in range(1, 8))
 #: Per-intent columns ``PREFIX:NAME``: the rationality ``beta`` and the ``belief``.
 INTENT_PREFIXES = ("beta", "belief")
+#: Bounds of the end-effector position (m): the JACO reaches about 0.9 m from its base, so
+#: anything beyond 2 m is not a pose of the arm (a unit error, a corrupted cell).
+POSITION_BOUND = 2.0
+#: Bounds of ``rot`` (rad): the rotate keys turn 0.5 rad/s, 20 rad in a 40 s trial.
+ROT_BOUND = 100.0
 #: Bounds of a column (or of every column with that prefix): (low, high), both included.
-COLUMN_RANGES = {"alpha": (0.0, 1.0), "belief": (0.0, 1.0), "beta": (0.0, math.inf)}
-#: Bounds of ``t`` (s): a trial starts at or after 0.
-TIME_RANGE = (0.0, math.inf)
+COLUMN_RANGES = {
+    "alpha": (0.0, 1.0),
+    "belief": (0.0, 1.0),
+    "beta": (0.0, math.inf),
+    **dict.fromkeys(("x", "y", "z"), (-POSITION_BOUND, POSITION_BOUND)),
+    "rot": (-ROT_BOUND, ROT_BOUND),
+}
+#: Bounds of ``t`` (s): a trial starts at or after 0 and lasts less than an hour.
+TIME_RANGE = (0.0, 3600.0)
+#: The control tick (s) of casa-trial/1 (20 Hz, the scene's ``teleop.dt``) and the relative
+#: tolerance on the step between two rows.
+TICK = 0.05
+TICK_TOLERANCE = 0.1
+#: The beliefs of a row sum to 1 within this.
+BELIEF_SUM_TOLERANCE = 1e-6
 
 #: Columns of a surveys file; ``source`` is optional.
 SURVEY_COLUMNS = ("participant", "task", "method", "phase", "question", "score")

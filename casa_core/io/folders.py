@@ -2,7 +2,9 @@
 
 Files that are neither ``.csv`` nor ``.json`` (a README, a notebook) are not logs:
 they are listed as ignored and never read. Hidden files and folders are skipped.
-Raw files are only read. The contract is ``docs/data-contracts.md``.
+Nothing outside a dataset's folder is read: a symlink resolving outside it is a
+``symlink`` problem, and symlinked folders are not followed. Raw files are only read.
+The contract is ``docs/data-contracts.md``.
 
 Examples
 --------
@@ -23,7 +25,7 @@ from pathlib import Path
 import pandas as pd
 
 from casa_core.io.contract import CONDITION_KEYS, SINGLE_TRIAL_PHASES, SURVEYS_NAME
-from casa_core.io.trial_log import load_surveys, load_trial, trial_files, trial_stem
+from casa_core.io.trial_log import inside, load_surveys, load_trial, trial_files, trial_stem
 from casa_core.io.validation import Problem
 
 _LOG_SUFFIXES = (".csv", ".json")
@@ -55,12 +57,55 @@ class FileCheck:
 
     @property
     def ok(self) -> bool:
-        """True when the file has no problem."""
-        return not self.problems
+        """True when the file has no error (warnings alone leave it usable)."""
+        return not self.errors
+
+    @property
+    def errors(self) -> list[Problem]:
+        """The problems that are errors."""
+        return [p for p in self.problems if p.is_error]
+
+    @property
+    def warnings(self) -> list[Problem]:
+        """The problems that are only warnings."""
+        return [p for p in self.problems if not p.is_error]
+
+
+def _walk(folder: Path) -> tuple[list[Path], list[FileCheck]]:
+    """The non-hidden files below ``folder``, and a check for each symlinked folder."""
+    found, links = [], []
+    # followlinks=False: a symlinked folder is listed in dirs but never entered.
+    for root, dirs, files in os.walk(folder, followlinks=False):
+        for name in sorted(d for d in dirs if not d.startswith(".")):
+            path = Path(root) / name
+            if path.is_symlink():
+                target = os.path.realpath(path)
+                if inside(path, folder):
+                    message = f"a symlinked folder (to {target}) is not followed"
+                    links.append(
+                        FileCheck(
+                            path, "other", [Problem(str(path), "", "symlink", message, "warning")]
+                        )
+                    )
+                else:
+                    message = (
+                        f"a symlinked folder resolving to {target}, outside the dataset folder: "
+                        "not read"
+                    )
+                    links.append(
+                        FileCheck(path, "other", [Problem(str(path), "", "symlink", message)])
+                    )
+        dirs[:] = sorted(
+            d for d in dirs if not d.startswith(".") and not (Path(root) / d).is_symlink()
+        )
+        found += [Path(root) / f for f in files if not f.startswith(".")]
+    return sorted(found), links
 
 
 def find_files(folder: Path | str) -> list[Path]:
     """Every non-hidden file below ``folder``, sorted, so that checks run in a fixed order.
+
+    Symlinked folders are not entered.
 
     Examples
     --------
@@ -72,27 +117,29 @@ def find_files(folder: Path | str) -> list[Path]:
     >>> [p.relative_to(folder).as_posix() for p in find_files(folder)]
     ['a.json', 'b/t.csv']
     """
-    folder = Path(folder)
-    found = []
-    for root, dirs, files in os.walk(folder):
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-        found += [Path(root) / f for f in files if not f.startswith(".")]
-    return sorted(found)
+    return _walk(Path(folder))[0]
 
 
-def _check_trial(stem: Path) -> FileCheck:
-    meta, frame, problems = load_trial(stem)
+def _check_trial(stem: Path, root: Path | None) -> FileCheck:
+    meta, frame, problems = load_trial(stem, root=root)
     paired = not any(p.rule == "pair" for p in problems)
     return FileCheck(trial_files(stem)[1], "trial", problems, meta if paired else None, frame)
+
+
+def _condition(meta: dict | None) -> tuple[str, ...] | None:
+    """The trial's participant, task, method and phase, when all are text."""
+    if not meta:
+        return None
+    key = tuple(meta.get(k) for k in CONDITION_KEYS)
+    return key if all(isinstance(v, str) for v in key) else None
 
 
 def _unique_conditions(checks: list[FileCheck]) -> None:
     """Add a ``unique-condition`` problem to each trial that repeats a single-trial condition."""
     conditions: dict[tuple, list[FileCheck]] = {}
     for check in checks:
-        meta = check.meta
-        if meta and meta.get("phase") in SINGLE_TRIAL_PHASES:
-            key = tuple(meta.get(k) for k in CONDITION_KEYS)
+        key = _condition(check.meta)
+        if key is not None and key[3] in SINGLE_TRIAL_PHASES:
             conditions.setdefault(key, []).append(check)
     for key, group in conditions.items():
         if len(group) > 1:
@@ -109,18 +156,121 @@ def _unique_conditions(checks: list[FileCheck]) -> None:
                 )
 
 
-def check_files(files: Iterable[Path | str]) -> list[FileCheck]:
+def _participant_case(checks: list[FileCheck]) -> None:
+    """Warn (``participant-case``) on trials whose participant differs from another by case."""
+    spellings: dict[str, set[str]] = {}
+    for check in checks:
+        key = _condition(check.meta)
+        if key is not None:
+            spellings.setdefault(key[0].casefold(), set()).add(key[0])
+    for check in checks:
+        key = _condition(check.meta)
+        if key is None or len(spellings[key[0].casefold()]) < 2:
+            continue
+        others = ", ".join(repr(p) for p in sorted(spellings[key[0].casefold()]) if p != key[0])
+        check.problems.append(
+            Problem(
+                str(trial_files(check.file)[0]),
+                "key 'participant'",
+                "participant-case",
+                f"{key[0]!r} differs only by case from {others}: the same person? "
+                "they are counted as different participants",
+                "warning",
+            )
+        )
+
+
+def _surveys_without_trials(surveys: list[FileCheck], trials: list[FileCheck]) -> None:
+    """Warn (``survey-trial``) on answers for a participant or condition without a trial."""
+    conditions = {key for key in map(_condition, (c.meta for c in trials)) if key is not None}
+    participants = {key[0] for key in conditions}
+    for check in surveys:
+        frame = check.frame
+        if frame is None or not len(frame):
+            continue
+        lines = pd.Series(frame.attrs.get("lines", range(2, len(frame) + 2)), index=frame.index)
+        keys = frame[list(CONDITION_KEYS)].apply(tuple, axis=1)
+        unknown = ~frame["participant"].isin(participants)
+        untried = ~unknown & ~keys.isin(conditions)
+        for mask, message in (
+            (unknown, "no trial of this participant in the dataset"),
+            (untried, "no trial of this participant in this task, method and phase"),
+        ):
+            if mask.any():
+                listed = ", ".join(str(n) for n in lines[mask].head(10))
+                more = f" (and {int(mask.sum()) - 10} more)" if mask.sum() > 10 else ""
+                where = f"line{'s' if mask.sum() > 1 else ''} {listed}{more}"
+                first = frame["participant"][mask].iloc[0]
+                check.problems.append(
+                    Problem(
+                        str(check.file),
+                        where,
+                        "survey-trial",
+                        f"{message} (e.g. participant {first!r}); the answers are kept",
+                        "warning",
+                    )
+                )
+
+
+def _classify(path: Path, root: Path | None) -> str | FileCheck:
+    """``"surveys"``, ``"trial"`` or a finished check (not a log, a misnamed one, a link out)."""
+    name = str(path)
+    if path.name == SURVEYS_NAME:
+        return "surveys"
+    if path.name.lower() == SURVEYS_NAME:
+        message = f"Likert answers are read only from files named exactly {SURVEYS_NAME!r}"
+        return FileCheck(path, "other", [Problem(name, "", "surveys-name", message)])
+    if path.suffix in _LOG_SUFFIXES:
+        return "trial"
+    if path.suffix.lower() in _LOG_SUFFIXES:
+        message = (
+            f"looks like a log but its suffix is not lower case: rename it to "
+            f"{path.stem + path.suffix.lower()!r}"
+        )
+        return FileCheck(path, "other", [Problem(name, "", "suffix", message)])
+    if root is not None and path.is_symlink() and not inside(path, root):
+        message = f"resolves to {os.path.realpath(path)}, outside the dataset folder: not read"
+        return FileCheck(path, "other", [Problem(name, "", "symlink", message)])
+    return FileCheck(path, "other")
+
+
+def _check_files(files: Iterable[tuple[Path, Path | None]]) -> list[FileCheck]:
+    checks: list[FileCheck] = []
+    surveys: list[FileCheck] = []
+    stems: dict[Path, Path | None] = {}
+    for path, root in sorted(set(files), key=lambda pair: str(pair[0])):
+        kind = _classify(path, root)
+        if kind == "surveys":
+            frame, problems = load_surveys(path, root=root)
+            surveys.append(FileCheck(path, "surveys", problems, frame=frame))
+        elif kind == "trial":
+            stems.setdefault(trial_stem(path), root)
+        else:
+            checks.append(kind)
+    trials = [_check_trial(stem, root) for stem, root in stems.items()]
+    _unique_conditions(trials)
+    _participant_case(trials)
+    _surveys_without_trials(surveys, trials)
+    checks += trials + surveys
+    checks.sort(key=lambda c: str(c.file))
+    return checks
+
+
+def check_files(files: Iterable[Path | str], *, root: Path | str | None = None) -> list[FileCheck]:
     """Check the given files as logs: each trial (its ``.csv`` and ``.json``), surveys, others.
 
     A trial is reported once, under its ``.csv``; a lone ``.json`` or ``.csv`` is a
     ``pair`` problem. Within the given files, a participant's condition in a
     single-trial phase (``SINGLE_TRIAL_PHASES``) must appear once: repeats would be
-    counted twice by the statistics.
+    counted twice by the statistics. Warnings: participants that differ only by case
+    (``participant-case``), answers without a trial (``survey-trial``).
 
     Parameters
     ----------
     files : iterable of path
         The files to check; each is read at most once.
+    root : path, optional
+        The dataset folder: no file resolving outside it is read.
 
     Returns
     -------
@@ -136,21 +286,8 @@ def check_files(files: Iterable[Path | str]) -> list[FileCheck]:
     >>> check.file.name, [p.rule for p in check.problems]
     ('t.csv', ['json', 'pair'])
     """
-    checks: list[FileCheck] = []
-    stems: dict[Path, None] = {}
-    for path in sorted({Path(p) for p in files}):
-        if path.name == SURVEYS_NAME:
-            frame, problems = load_surveys(path)
-            checks.append(FileCheck(path, "surveys", problems, frame=frame))
-        elif path.suffix in _LOG_SUFFIXES:
-            stems[trial_stem(path)] = None
-        else:
-            checks.append(FileCheck(path, "other"))
-    trials = [_check_trial(stem) for stem in stems]
-    _unique_conditions(trials)
-    checks += trials
-    checks.sort(key=lambda c: str(c.file))
-    return checks
+    top = None if root is None else Path(root)
+    return _check_files((Path(p), top) for p in files)
 
 
 def check_paths(paths: Iterable[Path | str]) -> list[FileCheck]:
@@ -159,7 +296,8 @@ def check_paths(paths: Iterable[Path | str]) -> list[FileCheck]:
     Parameters
     ----------
     paths : iterable of path
-        Files (either file of a trial names the pair) and folders.
+        Files (either file of a trial names the pair) and folders. Nothing resolving
+        outside a folder given (or, for a file, outside its folder) is read.
 
     Returns
     -------
@@ -174,28 +312,29 @@ def check_paths(paths: Iterable[Path | str]) -> list[FileCheck]:
     >>> [(c.kind, c.problems[0].rule) for c in check_paths([folder / "nowhere"])]
     [('missing', 'exists')]
     """
-    files: list[Path] = []
+    files: list[tuple[Path, Path | None]] = []
     problems: list[FileCheck] = []
     for path in map(Path, paths):
         if path.is_dir():
-            found = find_files(path)
-            files += found
-            if not any(f.suffix in _LOG_SUFFIXES for f in found):
+            found, links = _walk(path)
+            files += [(f, path) for f in found]
+            problems += links
+            if not any(f.suffix.lower() in _LOG_SUFFIXES for f in found):
                 missing = Problem(str(path), "", "non-empty", "no trial logs or surveys found")
                 problems.append(FileCheck(path, "folder", [missing]))
-        elif path.is_file():
+        elif path.is_file() or path.is_symlink():
             # A trial named by either file is checked as the pair.
-            files.append(path)
+            files.append((path, path.parent))
             csv_path = trial_files(path)[1]
             if path.suffix == ".json" and csv_path.is_file():
-                files.append(csv_path)
+                files.append((csv_path, path.parent))
         else:
             problems.append(
                 FileCheck(
                     path, "missing", [Problem(str(path), "", "exists", "no such file or folder")]
                 )
             )
-    return problems + check_files(files)
+    return problems + _check_files(files)
 
 
 def validate_paths(paths: Iterable[Path | str]) -> list[Problem]:

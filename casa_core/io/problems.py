@@ -5,6 +5,8 @@ Examples
 >>> problem = Problem("t.csv", "column 'x', line 3", "finite-number", "got 'far'")
 >>> print(LogError([problem]))
 t.csv: column 'x', line 3: [finite-number] got 'far'
+>>> print(Problem("t.csv", "column 't'", "tick-irregular", "steps vary", "warning"))
+t.csv: column 't': warning [tick-irregular] steps vary
 """
 
 from __future__ import annotations
@@ -27,6 +29,9 @@ class Problem:
         A short name of the rule broken, e.g. ``"required-key"``.
     message : str
         What is wrong and what is expected.
+    severity : str
+        ``"error"`` (the file breaks the contract and is left out) or ``"warning"``
+        (reported, the file is kept).
 
     Examples
     --------
@@ -38,10 +43,29 @@ class Problem:
     where: str
     rule: str
     message: str
+    severity: str = "error"
+
+    @property
+    def is_error(self) -> bool:
+        """True unless the problem is only a warning."""
+        return self.severity != "warning"
 
     def __str__(self) -> str:
         where = f": {self.where}" if self.where else ""
-        return f"{self.file}{where}: [{self.rule}] {self.message}"
+        mark = "warning " if self.severity == "warning" else ""
+        return f"{self.file}{where}: {mark}[{self.rule}] {self.message}"
+
+
+def errors(problems: Sequence[Problem]) -> list[Problem]:
+    """The problems that are errors (not warnings).
+
+    Examples
+    --------
+    >>> found = [Problem("a", "", "x", "m"), Problem("a", "", "y", "m", "warning")]
+    >>> [p.rule for p in errors(found)]
+    ['x']
+    """
+    return [p for p in problems if p.is_error]
 
 
 class LogError(ValueError):

@@ -24,12 +24,14 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
 import pandas as pd
 
 from casa_core.io.atomic import atomic_write_text, frame_to_csv_text
 from casa_core.io.contract import SCHEMA, SURVEYS_NAME
+from casa_core.io.problems import errors
 from casa_core.io.validation import (
     LogError,
     Problem,
@@ -66,9 +68,54 @@ def trial_files(path: Path | str) -> tuple[Path, Path]:
     return stem.with_name(stem.name + ".json"), stem.with_name(stem.name + ".csv")
 
 
-def _read_text(path: Path) -> str:
-    with open(path, encoding="utf-8", newline="") as handle:
-        return handle.read()
+def inside(path: Path | str, root: Path | str) -> bool:
+    """True when ``path``, symlinks resolved, is ``root`` or below it (resolved too).
+
+    Examples
+    --------
+    >>> inside("/data/raw/a/p01/t.csv", "/data/raw/a"), inside("/data/raw/b", "/data/raw/a")
+    (True, False)
+    """
+    real, top = os.path.realpath(path), os.path.realpath(root)
+    return real == top or real.startswith(top.rstrip(os.sep) + os.sep)
+
+
+def read_text(path: Path, *, root: Path | None = None) -> tuple[str | None, list[Problem]]:
+    """A file's UTF-8 text, or the problem that stops it being read.
+
+    With ``root``, a file that resolves (through symlinks) outside ``root`` is a
+    ``symlink`` problem and is not opened. Bytes that are not UTF-8 are a ``utf-8``
+    problem naming the line and byte offset; an unreadable file is ``readable``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "t.csv"
+    >>> _ = path.write_bytes(b"t,x\\n0,caf\\xe9\\n")
+    >>> text, problems = read_text(path)
+    >>> text, [(p.where, p.rule) for p in problems]
+    (None, [('line 2, byte 9', 'utf-8')])
+    """
+    name = str(path)
+    if root is not None and not inside(path, root):
+        where = os.path.realpath(path)
+        message = f"resolves to {where}, outside the dataset folder {root}: not read"
+        return None, [Problem(name, "", "symlink", message)]
+    if not Path(path).is_file():
+        # A FIFO or device would block or never end; a broken symlink has nothing to read.
+        return None, [Problem(name, "", "readable", "not a regular file: not read")]
+    try:
+        data = Path(path).read_bytes()
+    except OSError as error:
+        return None, [Problem(name, "", "readable", f"cannot be read: {error.strerror or error}")]
+    try:
+        # A UTF-8 byte-order mark (as some spreadsheets write) is not part of the text.
+        return data.decode("utf-8-sig"), []
+    except UnicodeDecodeError as error:
+        line = data[: error.start].count(b"\n") + 1
+        byte = data[error.start]
+        message = f"byte 0x{byte:02x} is not UTF-8 (latin-1?); save the file as UTF-8 text"
+        return None, [Problem(name, f"line {line}, byte {error.start}", "utf-8", message)]
 
 
 def _missing_pair(path: Path) -> Problem:
@@ -78,13 +125,15 @@ def _missing_pair(path: Path) -> Problem:
 # --------------------------------------------------------------------------- reading
 
 
-def load_meta(path: Path | str) -> tuple[dict | None, list[Problem]]:
+def load_meta(path: Path | str, *, root: Path | None = None) -> tuple[dict | None, list[Problem]]:
     """Load a trial's ``.json`` and check it.
 
     Parameters
     ----------
     path : path
         The ``.json`` file.
+    root : path, optional
+        The dataset folder: a file resolving outside it is not read (see :func:`read_text`).
 
     Returns
     -------
@@ -105,23 +154,30 @@ def load_meta(path: Path | str) -> tuple[dict | None, list[Problem]]:
     """
     path = Path(path)
     name = str(path)
-    if not path.is_file():
+    if not (path.is_file() or path.is_symlink()):  # a broken link: say so
         return None, [_missing_pair(path)]
+    text, problems = read_text(path, root=root)
+    if text is None:
+        return None, problems
     try:
-        meta = json.loads(_read_text(path))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        meta = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as error:
         return None, [Problem(name, "", "json", f"not valid JSON: {error}")]
     problems = check_meta(meta, name)
     return (meta if isinstance(meta, dict) else None), problems
 
 
-def load_trial(path: Path | str) -> tuple[dict | None, pd.DataFrame | None, list[Problem]]:
+def load_trial(
+    path: Path | str, *, root: Path | None = None
+) -> tuple[dict | None, pd.DataFrame | None, list[Problem]]:
     """Read and check one trial without raising: what could be parsed, and every problem.
 
     Parameters
     ----------
     path : path
         The trial's stem or either of its files.
+    root : path, optional
+        The dataset folder: a file resolving outside it is not read (see :func:`read_text`).
 
     Returns
     -------
@@ -141,11 +197,14 @@ def load_trial(path: Path | str) -> tuple[dict | None, pd.DataFrame | None, list
     (None, 1, ['pair'])
     """
     json_path, csv_path = trial_files(path)
-    meta, problems = load_meta(json_path)
+    meta, problems = load_meta(json_path, root=root)
     frame = None
-    if csv_path.is_file():
-        frame, frame_problems = parse_trial_csv(_read_text(csv_path), str(csv_path), meta=meta)
-        problems += frame_problems
+    if csv_path.is_file() or csv_path.is_symlink():
+        text, read_problems = read_text(csv_path, root=root)
+        problems += read_problems
+        if text is not None:
+            frame, frame_problems = parse_trial_csv(text, str(csv_path), meta=meta)
+            problems += frame_problems
     else:
         problems.append(_missing_pair(csv_path))
     return meta, frame, problems
@@ -168,7 +227,7 @@ def read_trial(stem: Path | str) -> tuple[dict, pd.DataFrame]:
     Raises
     ------
     LogError
-        Listing every problem of both files.
+        Listing every problem of both files, when any is an error (warnings alone pass).
 
     Examples
     --------
@@ -180,13 +239,17 @@ def read_trial(stem: Path | str) -> tuple[dict, pd.DataFrame]:
     ['pair']
     """
     meta, frame, problems = load_trial(stem)
-    if problems:
+    if errors(problems):
         raise LogError(problems)
     return meta, frame
 
 
-def load_surveys(path: Path | str) -> tuple[pd.DataFrame | None, list[Problem]]:
+def load_surveys(
+    path: Path | str, *, root: Path | None = None
+) -> tuple[pd.DataFrame | None, list[Problem]]:
     """Read and check a ``surveys.csv`` without raising; see :func:`parse_surveys_csv`.
+
+    The frame holds the good rows; ``root`` as for :func:`load_trial`.
 
     Examples
     --------
@@ -198,7 +261,10 @@ def load_surveys(path: Path | str) -> tuple[pd.DataFrame | None, list[Problem]]:
     (None, [("column 'score'", 'required-column')])
     """
     path = Path(path)
-    return parse_surveys_csv(_read_text(path), str(path))
+    text, problems = read_text(path, root=root)
+    if text is None:
+        return None, problems
+    return parse_surveys_csv(text, str(path))
 
 
 def read_surveys(path: Path | str) -> pd.DataFrame:
@@ -224,7 +290,7 @@ def read_surveys(path: Path | str) -> pd.DataFrame:
     [['understood', 6]]
     """
     frame, problems = load_surveys(path)
-    if problems:
+    if errors(problems):
         raise LogError(problems)
     return frame
 
@@ -288,7 +354,7 @@ def write_trial(stem: Path | str, meta: dict, frame: pd.DataFrame) -> None:
     problems = check_meta(meta, json_file)
     _, frame_problems = parse_trial_csv(csv_text, csv_file, meta=None if problems else meta)
     problems += frame_problems
-    if problems:
+    if errors(problems):
         raise LogError(problems)
     atomic_write_text(json_path, json_text)
     atomic_write_text(csv_path, csv_text)
@@ -326,6 +392,6 @@ def write_surveys(path: Path | str, frame: pd.DataFrame) -> None:
         raise LogError([Problem(str(path), "", "surveys-name", f"must be named {SURVEYS_NAME}")])
     text = frame_to_csv_text(frame)
     _, problems = parse_surveys_csv(text, str(path))
-    if problems:
+    if errors(problems):
         raise LogError(problems)
     atomic_write_text(path, text)

@@ -16,11 +16,13 @@ Examples
 from __future__ import annotations
 
 import math
+import unicodedata
 from collections.abc import Callable
 
 import pandas as pd
 
 from casa_core.io._cells import check_columns, in_range, numeric, read_csv_cells, where_lines
+from casa_core.io._ticks import check_belief_sum, check_ticks
 from casa_core.io.contract import (
     COLUMN_RANGES,
     FRAME_OPTIONAL,
@@ -46,7 +48,14 @@ from casa_core.io.contract import (
 )
 from casa_core.io.problems import LogError, Problem
 
-__all__ = ["LogError", "Problem", "check_meta", "parse_surveys_csv", "parse_trial_csv"]
+__all__ = [
+    "LogError",
+    "Problem",
+    "check_meta",
+    "parse_surveys_csv",
+    "parse_trial_csv",
+    "participant_id_problem",
+]
 
 # --------------------------------------------------------------------------- metadata
 
@@ -62,6 +71,38 @@ def _non_empty_string(value, meta: dict) -> str | None:
     if isinstance(value, str) and value.strip():
         return None
     return f"is {value!r}, expected a non-empty string"
+
+
+def participant_id_problem(value: str) -> str | None:
+    """What makes a participant id unusable as a name (and later a path part), or None.
+
+    An id has no ``/`` or ``\\``, is not ``.`` or ``..``, has no control characters and
+    no leading or trailing white space.
+
+    Examples
+    --------
+    >>> participant_id_problem("p01") is None, participant_id_problem("../x")
+    (True, "is '../x', must not contain '/' or '\\\\'")
+    """
+    if "/" in value or "\\" in value:
+        return f"is {value!r}, must not contain '/' or '\\'"
+    if value in (".", ".."):
+        return f"is {value!r}, must not be '.' or '..'"
+    if any(unicodedata.category(c) == "Cc" for c in value):
+        return f"is {value!r}, must not contain control characters"
+    if value != value.strip():
+        return f"is {value!r}, must not start or end with white space"
+    return None
+
+
+def _participant_id(value, meta: dict) -> str | None:
+    return participant_id_problem(value) if isinstance(value, str) and value.strip() else None
+
+
+def _integer(value, meta: dict) -> str | None:
+    if isinstance(value, int) and not isinstance(value, bool):
+        return None
+    return f"is {value!r}, expected an integer"
 
 
 def _one_of(allowed: tuple[str, ...]) -> MetaCheck:
@@ -107,11 +148,13 @@ def _positive_number(value, meta: dict) -> str | None:
 META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
     ("schema", "schema", _schema),
     ("participant", "non-empty-string", _non_empty_string),
+    ("participant", "participant-id", _participant_id),
     *((key, "enum", _one_of(allowed)) for key, allowed in META_ENUMS),
     ("phase", "task-phase", _task_phase),
     ("method", "phase-method", _phase_method),
     ("intents", "intent-names", _intent_names),
     ("max_duration", "positive-number", _positive_number),
+    ("seed", "integer", _integer),
 )
 
 
@@ -271,6 +314,9 @@ def parse_trial_csv(
             )
     if "t" in frame.columns:
         in_range(frame["t"], "t", file, problems, *TIME_RANGE)
+        if not any(p.rule == "t-increasing" for p in problems):
+            check_ticks(frame["t"], file, problems)
+    check_belief_sum(frame, file, problems)
     if "keys" in cells.columns:
         frame["keys"] = cells["keys"]
         _check_keys(cells["keys"], file, problems)
@@ -282,7 +328,7 @@ def parse_trial_csv(
 
 
 def parse_surveys_csv(text: str, file: str) -> tuple[pd.DataFrame | None, list[Problem]]:
-    """Parse a ``surveys.csv`` text and check it.
+    """Parse a ``surveys.csv`` text and check it, row by row.
 
     Parameters
     ----------
@@ -294,8 +340,10 @@ def parse_surveys_csv(text: str, file: str) -> tuple[pd.DataFrame | None, list[P
     Returns
     -------
     frame : pandas.DataFrame or None
-        The answers with ``score`` as int; None when there is any problem.
+        The answers of the rows without a problem, ``score`` as int; None when the
+        file itself is bad (unreadable, a column missing or unknown).
     problems : list of Problem
+        Row problems name their lines: those rows are not in ``frame``.
 
     Examples
     --------
@@ -304,9 +352,10 @@ def parse_surveys_csv(text: str, file: str) -> tuple[pd.DataFrame | None, list[P
     >>> frame, problems = parse_surveys_csv(text, "surveys.csv")
     >>> frame["score"].tolist(), problems
     ([5], [])
-    >>> _, problems = parse_surveys_csv(text.replace("useful,5", "fun,8"), "surveys.csv")
-    >>> [(p.where, p.rule) for p in problems]
-    [("column 'question', line 2", 'enum'), ("column 'score', line 2", 'likert-score')]
+    >>> bad = text + "p01,known_goal,NA,no_misspecification,fun,8\\n"
+    >>> frame, problems = parse_surveys_csv(bad, "surveys.csv")
+    >>> len(frame), [(p.where, p.rule) for p in problems]
+    (1, [("column 'question', line 3", 'enum'), ("column 'score', line 3", 'likert-score')])
     """
     cells, problems = read_csv_cells(text, file)
     if cells is None:
@@ -321,49 +370,47 @@ def parse_surveys_csv(text: str, file: str) -> tuple[pd.DataFrame | None, list[P
     )
     if problems:
         return None, problems
-    empty = cells["participant"].str.strip().eq("")
-    if empty.any():
-        problems.append(
-            Problem(
-                file, f"column 'participant', {where_lines(empty)}", "non-empty-string", "is empty"
-            )
-        )
+    if len(cells) == 0:
+        problems.append(Problem(file, "", "no-answers", "a header and no answers", "warning"))
+    bad_rows = pd.Series(False, index=cells.index)
+
+    def bad(mask: pd.Series, column: str | None, rule: str, message: str) -> None:
+        nonlocal bad_rows
+        if mask.any():
+            lines = where_lines(mask)
+            where = lines if column is None else f"column {column!r}, {lines}"
+            problems.append(Problem(file, where, rule, message))
+            bad_rows |= mask
+
+    participants = cells["participant"]
+    bad(participants.str.strip().eq(""), "participant", "non-empty-string", "is empty")
+    reasons = participants.map(lambda p: participant_id_problem(p) if p.strip() else None)
+    bad(reasons.notna(), "participant", "participant-id", next(iter(reasons.dropna()), ""))
     for column, values in SURVEY_ENUMS:
         if column not in cells.columns:
             continue  # an optional column
         outside = ~cells[column].isin(values)
-        if outside.any():
-            problems.append(
-                Problem(
-                    file,
-                    f"column {column!r}, {where_lines(outside)}",
-                    "enum",
-                    f"got {cells[column][outside].iloc[0]!r}, expected one of {', '.join(values)}",
-                )
-            )
+        first = cells[column][outside].iloc[0] if outside.any() else ""
+        bad(outside, column, "enum", f"got {first!r}, expected one of {', '.join(values)}")
     score_ok = cells["score"].str.strip().isin([str(s) for s in LIKERT_SCORES])
-    if not score_ok.all():
-        problems.append(
-            Problem(
-                file,
-                f"column 'score', {where_lines(~score_ok)}",
-                "likert-score",
-                f"got {cells['score'][~score_ok].iloc[0]!r}, expected an integer "
-                f"{LIKERT_SCORES[0]} to {LIKERT_SCORES[-1]}",
-            )
-        )
-    repeated = cells.duplicated(subset=list(SURVEY_ANSWER_KEY), keep="first")
-    if repeated.any():
-        problems.append(
-            Problem(
-                file,
-                where_lines(repeated),
-                "unique-answer",
-                "a participant answers each question once per task, method and phase",
-            )
-        )
-    if problems:
-        return None, problems
-    frame = cells.copy()
+    first = cells["score"][~score_ok].iloc[0] if not score_ok.all() else ""
+    bad(
+        ~score_ok,
+        "score",
+        "likert-score",
+        f"got {first!r}, expected an integer {LIKERT_SCORES[0]} to {LIKERT_SCORES[-1]}",
+    )
+    # Which of two answers to the same question is right is unknown: both are left out.
+    repeated = cells.duplicated(subset=list(SURVEY_ANSWER_KEY), keep=False)
+    bad(
+        repeated,
+        None,
+        "unique-answer",
+        "a participant answers each question once per task, method and phase",
+    )
+    frame = cells[~bad_rows].copy()
     frame["score"] = frame["score"].str.strip().astype(int)
-    return frame.reset_index(drop=True), problems
+    lines = [int(n) for n in frame.index]
+    frame = frame.reset_index(drop=True)
+    frame.attrs["lines"] = lines  # each answer's line in the file, for later problems
+    return frame, problems

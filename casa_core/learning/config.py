@@ -3,8 +3,10 @@ and how to restore its choices: docs/departures.md, "Learning a new intent")."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
+from casa_core._checks import require_positive
 from casa_core.intents import COST_FORMS
 from casa_core.planning import PlannerConfig
 
@@ -100,10 +102,21 @@ class IRLConfig:
     planner: PlannerConfig = PlannerConfig()
 
     def __post_init__(self):
-        if self.verify_candidates < 1:
-            raise ValueError(
-                f"IRLConfig.verify_candidates must be >= 1, got {self.verify_candidates!r}"
-            )
+        counts = ("max_iterations", "steps_per_iteration", "explore_iterations")
+        for name in (*counts, "assist_warm_iterations", "verify_candidates", "min_iterations"):
+            value, low = getattr(self, name), 0 if name == "min_iterations" else 1
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= low):
+                raise ValueError(f"IRLConfig.{name} must be an integer >= {low}, got {value!r}")
+        require_positive("IRLConfig", hidden=self.hidden, cost_scale=self.cost_scale)
+        require_positive("IRLConfig", length_scale=self.length_scale, lr=self.lr)
+        require_positive("IRLConfig", tol_gap=self.tol_gap, tol_end=self.tol_end)
+        require_positive("IRLConfig", tol_match=self.tol_match)
+        for name in ("negative_slope", "weight_decay", "logit_penalty"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ValueError(f"IRLConfig.{name} must be a finite number >= 0, got {value!r}")
+        if int(self.hidden) != self.hidden:
+            raise ValueError(f"IRLConfig.hidden must be an integer, got {self.hidden!r}")
         if self.calibration is not None and self.calibration not in COST_FORMS:
             raise ValueError(
                 f"IRLConfig.calibration must be one of {COST_FORMS} or None, "

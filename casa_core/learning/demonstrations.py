@@ -48,5 +48,12 @@ def demo_steps(demos, *, dt: float, horizon: float) -> int:
     >>> demo_steps([np.array([[0.0, 0, 0, 0, 0], [20.0, 0, 0, 0, 0]])], dt=0.5, horizon=15.0)
     40
     """
+    for demo in demos:
+        if np.ndim(demo) != 2 or np.shape(demo)[1] != 5 or len(demo) < 2:
+            raise ValueError(
+                f"a demonstration must be (n >= 2, 5) [t, x, y, z, rot], got {np.shape(demo)}"
+            )
+        if not np.isfinite(demo).all():
+            raise ValueError("a demonstration contains NaN or infinite values")
     longest = max(float(d[-1, 0] - d[0, 0]) for d in demos)
     return max(steps_left(horizon, dt), int(math.ceil(longest / dt - 1e-9)))

@@ -149,8 +149,8 @@ class MaxEntIRL:
         if not demos:
             raise ValueError(f"learning intent {name!r} needs at least one demonstration")
         planner = config.planner
-        n_steps = demo_steps(demos, dt=planner.dt, horizon=planner.horizon)
         try:
+            n_steps = demo_steps(demos, dt=planner.dt, horizon=planner.horizon)
             waypoints = np.stack([demo_waypoints(d, dt=planner.dt, n_steps=n_steps) for d in demos])
             object_names, positions = object_positions(objects)
         except ValueError as error:

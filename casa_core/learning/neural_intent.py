@@ -7,6 +7,7 @@ from collections.abc import Mapping
 import numpy as np
 import torch
 
+from casa_core._checks import require_positive
 from casa_core.intents import COST_FORMS, GoalIntent
 from casa_core.learning.features import bounded_cost, cost_logits, feature_names, object_positions
 from casa_core.planning import PlannedIntent, PlannerConfig
@@ -72,6 +73,8 @@ class NeuralIntent(PlannedIntent):
             self.object_names, self.objects = object_positions(objects)
         except ValueError as error:
             raise ValueError(f"intent {name!r}: {error}") from None
+        # length_scale divides the features (0 gives NaN costs); a cost_scale <= 0 is no cost.
+        require_positive(f"intent {name!r}", cost_scale=cost_scale, length_scale=length_scale)
         self.cost_scale = float(cost_scale)
         self.length_scale = float(length_scale)
         self.cost_offset = float(cost_offset)

@@ -33,6 +33,23 @@ def equal_to_rounding(values) -> bool:
     return float(np.ptp(values)) <= 1e-9 * float(np.abs(values).max())
 
 
+def require_representable(values, dv: str) -> None:
+    """Raise :class:`Skipped` when the sum of squares of ``values`` overflows double precision.
+
+    Values of 1e154 and beyond (valid numbers, e.g. the error of a trial far out of the
+    workspace) give infinite sums of squares, and every F, t or chi-square from them is NaN.
+    """
+    values = np.asarray(values, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = np.sum(np.square(values - values.mean())) if values.size else 0.0
+    if not np.isfinite(total):
+        largest = float(np.abs(values).max())
+        raise Skipped(
+            f"values of {dv!r} too large (up to {largest:.3g}): their sum of squares overflows "
+            "double precision"
+        )
+
+
 def levels(series: pd.Series) -> list:
     """Distinct values of ``series`` in a stable order: category order, else sorted."""
     if isinstance(series.dtype, pd.CategoricalDtype):
@@ -60,3 +77,47 @@ def skipped_row(columns: Sequence[str], note: str, **known) -> pd.DataFrame:
     row.update(known)
     row["note"] = note
     return pd.DataFrame([row], columns=[*columns, "note"])
+
+
+def complete_cells(frame, dv, within, subject):
+    """Cell means per subject, keeping only subjects who have every cell; and a note."""
+    cells = frame.groupby([subject, *within], observed=True)[dv].mean().reset_index()
+    n_cells = int(np.prod([len(levels(frame[w])) for w in within]))
+    counts = cells.groupby(subject, observed=True)[dv].count()
+    keep = counts.index[counts == n_cells]
+    note = ""
+    if len(keep) < len(counts):
+        note = f"{len(counts) - len(keep)} participant(s) with missing conditions dropped"
+    return cells[cells[subject].isin(keep)], note
+
+
+def no_error_variance(cells, dv, factors, subject) -> bool:
+    """Whether the participants' and the cells' means explain every cell mean (to rounding).
+
+    The error terms of a repeated-measures ANOVA are the participant-by-condition
+    interactions; when they vanish, pingouin's F is a ratio of rounding errors.
+    """
+    wide = cells.pivot_table(index=subject, columns=factors, values=dv, observed=True)
+    values = wide.to_numpy(dtype=float)
+    grand = values.mean()
+    residual = values - values.mean(axis=1, keepdims=True) - values.mean(axis=0) + grand
+    total = ((values - grand) ** 2).sum()
+    return bool((residual**2).sum() <= 1e-12 * total)
+
+
+def require_more_participants(frame, factors, terms, n: int) -> None:
+    """Raise :class:`Skipped` unless ``n`` exceeds every term's degrees of freedom.
+
+    The sphericity test and the Greenhouse-Geisser epsilon estimate the covariance of a
+    term's contrasts, singular with ``n <= df`` participants (pingouin divides by zero
+    at 2 participants and 3 conditions).
+    """
+    dfs = [len(levels(frame[factor])) - 1 for factor in factors]
+    if len(factors) == 2:
+        dfs.append(dfs[0] * dfs[1])
+    for term, df in zip(terms, dfs, strict=True):
+        if n <= df:
+            raise Skipped(
+                f"needs more participants with every condition than the {df} degrees of "
+                f"freedom of {term!r} (sphericity), got {n}"
+            )

@@ -49,6 +49,8 @@ def _number(value: float, digits: int = 2) -> str:
 
 def _df(value: float) -> str:
     """Degrees of freedom: integers as integers, corrected ones with two decimals."""
+    if not math.isfinite(value):
+        return "n/a"
     return str(int(round(value))) if abs(value - round(value)) < 1e-9 else f"{value:.2f}"
 
 

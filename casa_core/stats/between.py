@@ -19,7 +19,14 @@ import statsmodels.formula.api as smf
 from scipy import stats
 from statsmodels.stats.anova import anova_lm
 
-from casa_core.stats._tables import Skipped, clean, equal_to_rounding, levels, skipped_row
+from casa_core.stats._tables import (
+    Skipped,
+    clean,
+    equal_to_rounding,
+    levels,
+    require_representable,
+    skipped_row,
+)
 
 ANOVA_COLUMNS = ["term", "F", "df1", "df2", "p", "np2", "n"]
 TUKEY_COLUMNS = ["A", "B", "diff", "p", "ci_low", "ci_high", "n_A", "n_B"]
@@ -135,6 +142,7 @@ def _fit_linear_model(frame, dv, factors, covariate) -> pd.DataFrame:
     if covariate is not None and frame[covariate].nunique() < 2:
         raise Skipped(f"the covariate {covariate!r} takes a single value")
     y = model_frame["y"].to_numpy()
+    require_representable(y, dv)
     total_ss = float(np.sum((y - y.mean()) ** 2))
     if equal_to_rounding(y):
         raise Skipped(f"zero variance: every value of {dv!r} equals {y[0]!r}")
@@ -202,6 +210,11 @@ def tukey_hsd(data: pd.DataFrame, dv: str, between: str) -> pd.DataFrame:
             raise Skipped(f"needs at least 2 levels of {between!r}, found {found}")
         if len(frame) - len(found) < 1:
             raise Skipped(f"no residual degrees of freedom ({len(frame)} observations)")
+        single = [str(level) for level, g in zip(found, groups, strict=True) if len(g) < 2]
+        if single:
+            # scipy's tukey_hsd refuses groups of one observation.
+            raise Skipped(f"needs at least 2 observations per group; one only: {', '.join(single)}")
+        require_representable(frame[dv], dv)
         within_ss = sum(float(np.sum((g - g.mean()) ** 2)) for g in groups)
         if within_ss <= 0.0:
             raise Skipped("zero within-group variance: the studentized range is undefined")
@@ -352,6 +365,7 @@ def _two_samples(frame, dv, between, new, reference, subject):
         b = frame.loc[frame[between] == reference, dv].to_numpy()
         if min(len(a), len(b)) < 2:
             raise Skipped(f"needs at least 2 observations per group, got {len(a)} and {len(b)}")
+        require_representable(np.concatenate([a, b]), dv)
         if np.var(a) == 0.0 and np.var(b) == 0.0:
             raise Skipped("zero variance in both groups: the confidence bound is undefined")
         return a, b, ""
@@ -364,6 +378,7 @@ def _two_samples(frame, dv, between, new, reference, subject):
     if len(complete) < 2:
         raise Skipped(f"needs at least 2 participants with both conditions, got {len(complete)}")
     a, b = complete[new].to_numpy(), complete[reference].to_numpy()
+    require_representable(np.concatenate([a, b]), dv)
     if np.var(a - b) == 0.0:
         raise Skipped("zero variance of the paired differences: the bound is undefined")
     return a, b, note

@@ -77,9 +77,16 @@ def _conditions(table: pd.DataFrame, what: str) -> pd.DataFrame:
 def _cell_means(trials: pd.DataFrame, metric: str) -> pd.DataFrame:
     """One observation per participant, task and condition: the mean over repeated trials."""
     frame = trials[["participant", "task", "method", metric]].dropna(subset=[metric])
-    return frame.groupby(["participant", "task", "method"], observed=True, as_index=False)[
-        metric
-    ].mean()
+    keys = ["participant", "task", "method"]
+    means = frame.groupby(keys, observed=True, as_index=False)[metric].mean()
+    overflow = ~np.isfinite(means[metric].to_numpy(dtype=float))
+    if overflow.any():
+        # Sums of values near the float maximum overflow; the means of scaled values do not.
+        scale = float(frame[metric].abs().max())
+        scaled = frame.assign(**{metric: frame[metric] / scale})
+        again = scaled.groupby(keys, observed=True, as_index=False)[metric].mean()
+        means.loc[overflow, metric] = again.loc[overflow, metric] * scale
+    return means
 
 
 def _subset(cells: pd.DataFrame, tasks: list[str], conditions: list[str]) -> pd.DataFrame:

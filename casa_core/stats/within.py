@@ -24,7 +24,17 @@ import statsmodels.formula.api as smf
 from scipy import stats
 from statsmodels.stats.multitest import multipletests
 
-from casa_core.stats._tables import Skipped, clean, equal_to_rounding, levels, skipped_row
+from casa_core.stats._tables import (
+    Skipped,
+    clean,
+    complete_cells,
+    equal_to_rounding,
+    levels,
+    no_error_variance,
+    require_more_participants,
+    require_representable,
+    skipped_row,
+)
 
 RM_COLUMNS = ["term", "F", "df1", "df2", "p", "p_gg", "eps", "ng2", "n"]
 MIXED_COLUMNS = ["term", "chi2", "df1", "p", "n", "n_groups"]
@@ -36,33 +46,7 @@ def _as_list(factors: str | Sequence[str]) -> list[str]:
     return [factors] if isinstance(factors, str) else list(factors)
 
 
-def _complete_cells(frame, dv, within, subject):
-    """Cell means per subject, keeping only subjects who have every cell; and a note."""
-    cells = frame.groupby([subject, *within], observed=True)[dv].mean().reset_index()
-    n_cells = int(np.prod([len(levels(frame[w])) for w in within]))
-    counts = cells.groupby(subject, observed=True)[dv].count()
-    keep = counts.index[counts == n_cells]
-    note = ""
-    if len(keep) < len(counts):
-        note = f"{len(counts) - len(keep)} participant(s) with missing conditions dropped"
-    return cells[cells[subject].isin(keep)], note
-
-
 _DV = "__dv__"
-
-
-def _no_error_variance(cells, dv, factors, subject) -> bool:
-    """Whether the participants' and the cells' means explain every cell mean (to rounding).
-
-    The error terms of a repeated-measures ANOVA are the participant-by-condition
-    interactions; when they vanish, pingouin's F is a ratio of rounding errors.
-    """
-    wide = cells.pivot_table(index=subject, columns=factors, values=dv, observed=True)
-    values = wide.to_numpy(dtype=float)
-    grand = values.mean()
-    residual = values - values.mean(axis=1, keepdims=True) - values.mean(axis=0) + grand
-    total = ((values - grand) ** 2).sum()
-    return bool((residual**2).sum() <= 1e-12 * total)
 
 
 def rm_anova(
@@ -110,13 +94,15 @@ def rm_anova(
                 raise Skipped(
                     f"needs at least 2 levels of {factor!r}, found {levels(frame[factor])}"
                 )
-        cells, note = _complete_cells(frame, dv, factors, subject)
+        cells, note = complete_cells(frame, dv, factors, subject)
         n = cells[subject].nunique()
         if n < 2:
             raise Skipped(f"needs at least 2 participants with every condition, got {n}")
+        require_more_participants(frame, factors, terms, n)
+        require_representable(cells[dv], dv)
         if equal_to_rounding(cells[dv]):
             raise Skipped(f"zero variance: every value of {dv!r} is the same")
-        if _no_error_variance(cells, dv, factors, subject):
+        if no_error_variance(cells, dv, factors, subject):
             raise Skipped(
                 "no error variance: every participant differs between the conditions by the "
                 "same amount, so F is undefined"
@@ -139,17 +125,18 @@ def rm_anova(
         )
     rows = []
     for term, (_, line) in zip(terms, table.iterrows(), strict=True):
-        f_value = float(line["F"])
+        # pingouin leaves out the columns it could not compute (an F of 0 / 0).
+        f_value = float(line.get("F", np.nan))
         rows.append(
             {
                 "term": term,
                 "F": f_value,
                 "df1": float(line["ddof1"]),
                 "df2": float(line["ddof2"]),
-                "p": float(line["p_unc"]),
+                "p": float(line.get("p_unc", np.nan)),
                 "p_gg": float(line.get("p_GG_corr", np.nan)),
                 "eps": float(line.get("eps", np.nan)),
-                "ng2": float(line["ng2"]),
+                "ng2": float(line.get("ng2", np.nan)),
                 "n": n,
                 "note": note
                 if np.isfinite(f_value)
@@ -202,6 +189,7 @@ def mixedlm(data: pd.DataFrame, dv: str, fixed: str | Sequence[str], subject: st
         n_groups = frame[subject].nunique()
         if n_groups < 2:
             raise Skipped(f"needs at least 2 participants, got {n_groups}")
+        require_representable(frame[dv], dv)
         if frame[dv].var() == 0.0:
             raise Skipped(f"zero variance: every value of {dv!r} is the same")
         names = {dv: "y", subject: "g"} | {f: f"f{i}" for i, f in enumerate(factors)}
@@ -275,11 +263,11 @@ def friedman(data: pd.DataFrame, dv: str, within: str, subject: str) -> pd.DataF
         found = levels(frame[within])
         if len(found) < 3:
             raise Skipped(f"needs at least 3 conditions, found {found}")
-        cells, note = _complete_cells(frame, dv, [within], subject)
-        wide = cells.pivot(index=subject, columns=within, values=dv)[found]
-        n = len(wide)
+        cells, note = complete_cells(frame, dv, [within], subject)
+        n = cells[subject].nunique()
         if n < 2:
             raise Skipped(f"needs at least 2 participants with every condition, got {n}")
+        wide = cells.pivot(index=subject, columns=within, values=dv)[found]
         if (wide.nunique(axis=1) == 1).all():
             raise Skipped("every participant gave the same score to every condition")
         result = stats.friedmanchisquare(*(wide[c].to_numpy() for c in found))
@@ -372,9 +360,14 @@ def _signed_rank(frame, dv, within, subject, a, b) -> pd.Series:
         missing = a if not (frame[within] == a).any() else b
         raise Skipped(f"no observations of {within} = {missing!r}")
     pair = frame[frame[within].isin([a, b])]
-    cells, note = _complete_cells(pair, dv, [within], subject)
+    cells, note = complete_cells(pair, dv, [within], subject)
+    if cells.empty:
+        raise Skipped(f"no participant has both {within} = {a!r} and {b!r}")
     wide = cells.pivot(index=subject, columns=within, values=dv)
-    diff = (wide[a] - wide[b]).to_numpy()
+    with np.errstate(over="ignore"):
+        diff = (wide[a] - wide[b]).to_numpy()
+    if not np.isfinite(diff).all():
+        raise Skipped(f"paired differences of {dv!r} overflow double precision")
     nonzero = diff[diff != 0.0]
     if len(nonzero) == 0:
         raise Skipped("all paired differences are zero")

@@ -33,13 +33,37 @@ LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
 PARAMS_STREAM, LIKERT_STREAM = 0, 9999
 
 
+def check_index(index) -> int:
+    """``index``, a participant's 0-based number, if it is an integer >= 0; else ValueError.
+
+    Examples
+    --------
+    >>> check_index(0)
+    0
+    >>> check_index(-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: participant index must be an integer >= 0 (0-based), got -1
+    """
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
+        raise ValueError(f"participant index must be an integer >= 0 (0-based), got {index!r}")
+    return int(index)
+
+
 def participant_id(index: int) -> str:
-    """``p01``, ``p02``, ... for the 0-based ``index``."""
-    return f"p{index + 1:02d}"
+    """``p01``, ``p02``, ... for the 0-based ``index``.
+
+    Examples
+    --------
+    >>> participant_id(0), participant_id(11)
+    ('p01', 'p12')
+    """
+    return f"p{check_index(index) + 1:02d}"
 
 
 def participant_params(index: int, simulation: dict) -> ParticipantParams:
     """The participant's operator parameters, drawn from the population of the config."""
+    check_index(index)
     rng = np.random.default_rng([simulation["seed"], index, PARAMS_STREAM])
     return draw_participants(1, simulation["population"], rng)[0]
 
@@ -86,6 +110,7 @@ def simulate_before_learning(
     """
     from casa_core.robot.sim import ArmSimulation
 
+    check_index(index)
     pid = pid or participant_id(index)
     params = params or participant_params(index, simulation)
     seed = int(simulation["seed"])
@@ -171,6 +196,7 @@ def simulate_after_learning(
     """Phase 4 (CASA with every learned intent), then ``surveys.csv`` for all conditions."""
     from casa_core.robot.sim import ArmSimulation
 
+    check_index(index)
     pid = pid or participant_id(index)
     params = params or participant_params(index, simulation)
     seed = int(simulation["seed"])

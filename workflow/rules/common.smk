@@ -2,6 +2,7 @@
 # No rules here.
 import os
 import re
+import sys
 from pathlib import Path
 
 from casa_core import config as casa_config
@@ -41,6 +42,7 @@ def effective_config_file(path=Path("data/interim/config.yaml")):
 
 
 CONFIG_FILE = effective_config_file()
+
 # The simulated study is the dataset data/raw/simulated, and the case study's tables
 # and figures join the default target (workflow/rules/study.smk); `--config
 # simulate=false` builds only the datasets already in data/raw.
@@ -140,3 +142,21 @@ def report_pages():
     if SIMULATE:
         pages.append(str(REPORT / "simulated" / "learning.html"))
     return pages
+
+
+def stats_input(wildcards):
+    """The tables of the statistics; statistics left beside missing tables are removed.
+
+    Snakemake keeps an output whose inputs were deleted (a failed processing step
+    deletes its tables), so such statistics would describe tables that are gone;
+    removed here, they are rebuilt with the tables. A dry run only says so.
+    """
+    folder = PROCESSED / wildcards.ds
+    tables = {name: folder / f"{name}.csv" for name in ("trials", "likert")}
+    if not all(path.exists() for path in tables.values()):
+        for stale in (folder / "stats.csv", folder / "stats.md"):
+            if stale.exists() and workflow.dryrun:
+                print(f"{stale}: its tables are missing; a run rebuilds it", file=sys.stderr)
+            elif stale.exists():
+                stale.unlink()
+    return tables

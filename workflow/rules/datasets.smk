@@ -1,7 +1,8 @@
 # Per dataset: check every raw file against casa-trial/1, then build its tables.
 # Raw files are only read. A bad file stops this dataset (every problem is listed
 # in the log and on the console); with allow_invalid=true bad files are excluded
-# and listed in validation.csv.
+# and listed in validation.csv. The console shows every problem (tee); exec keeps the
+# casa command a direct child of Snakemake (workflow/rules/common.smk).
 
 
 rule validate:
@@ -17,7 +18,8 @@ rule validate:
         raw=lambda wildcards: RAW / wildcards.ds,
         allow_invalid=allow_invalid_flag,
     shell:
-        "casa validate {params.raw} --report {output} {params.allow_invalid} 2>&1 | tee {log}"
+        "exec casa validate {params.raw} --report {output} {params.allow_invalid} "
+        "> >(tee {log}) 2>&1"
 
 
 rule process:
@@ -38,5 +40,5 @@ rule process:
         out=lambda wildcards: PROCESSED / wildcards.ds,
         allow_invalid=allow_invalid_flag,
     shell:
-        "casa process {params.raw} --out {params.out} --scene {input.scene} "
+        "exec casa process {params.raw} --out {params.out} --scene {input.scene} "
         "--dataset {wildcards.ds} {params.allow_invalid} > {log} 2>&1"

@@ -22,7 +22,7 @@ rule figure_objective:
     params:
         stem=lambda wildcards: FIGURES / wildcards.ds / "objective",
     shell:
-        "casa figure objective --trials {input.trials} --stats {input.stats} "
+        "exec casa figure objective --trials {input.trials} --stats {input.stats} "
         "--out {params.stem} > {log} 2>&1"
 
 
@@ -45,7 +45,7 @@ rule figure_likert:
     params:
         stem=lambda wildcards: FIGURES / wildcards.ds / "likert",
     shell:
-        "casa figure likert --likert {input.likert} --stats {input.stats} "
+        "exec casa figure likert --likert {input.likert} --stats {input.stats} "
         "--out {params.stem} > {log} 2>&1"
 
 
@@ -59,7 +59,7 @@ rule figure_scene:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa figure scene --scene {input.scene} --out {output} > {log} 2>&1"
+        "exec casa figure scene --scene {input.scene} --out {output} > {log} 2>&1"
 
 
 rule figure_arbitration:
@@ -80,7 +80,7 @@ rule figure_arbitration:
         stem=FIGURES / "arbitration",
         epsilon=config["case_study"]["epsilon"],
     shell:
-        "casa figure arbitration --arbitration {input.arbitration} "
+        "exec casa figure arbitration --arbitration {input.arbitration} "
         "--epsilon {params.epsilon} --out {params.stem} > {log} 2>&1"
 
 
@@ -102,5 +102,5 @@ rule figure_case_study:
         stem=FIGURES / "case_study",
         epsilon=config["case_study"]["epsilon"],
     shell:
-        "casa figure case_study --steps {input.steps} --epsilon {params.epsilon} "
+        "exec casa figure case_study --steps {input.steps} --epsilon {params.epsilon} "
         "--out {params.stem} > {log} 2>&1"

@@ -21,7 +21,7 @@ rule report_summary:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa report summary --stats {input.stats} --dataset {wildcards.ds} "
+        "exec casa report summary --stats {input.stats} --dataset {wildcards.ds} "
         "--out-md {output.md} --out-html {output.html} > {log} 2>&1"
 
 
@@ -40,7 +40,7 @@ rule report_stats:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa report markdown {input.md} --out {output} > {log} 2>&1"
+        "exec casa report markdown {input.md} --out {output} > {log} 2>&1"
 
 
 rule report_table:
@@ -60,5 +60,5 @@ rule report_table:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa report table {input} --title '{wildcards.ds}: {wildcards.table}.csv' --out {output} "
+        "exec casa report table {input} --title '{wildcards.ds}: {wildcards.table}.csv' --out {output} "
         "> {log} 2>&1"

@@ -3,8 +3,7 @@
 
 rule stats:
     input:
-        trials=PROCESSED / "{ds}" / "trials.csv",
-        likert=PROCESSED / "{ds}" / "likert.csv",
+        unpack(stats_input),
     output:
         csv=PROCESSED / "{ds}" / "stats.csv",
         md=report(
@@ -20,5 +19,5 @@ rule stats:
     params:
         likert=likert_option,
     shell:
-        "casa stats --trials {input.trials} {params.likert} "
+        "exec casa stats --trials {input.trials} {params.likert} "
         "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"

@@ -24,7 +24,7 @@ rule simulate_before_learning:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa simulate before --config {input.config} --participant {wildcards.p} "
+        "exec casa simulate before --config {input.config} --participant {wildcards.p} "
         "--out {output} > {log} 2>&1"
 
 
@@ -40,7 +40,7 @@ rule learn_intent:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa simulate learn --config {input.config} --participant {wildcards.p} "
+        "exec casa simulate learn --config {input.config} --participant {wildcards.p} "
         "--task {wildcards.task} --before {input.before} --library {output.library} "
         "--out {output.row} > {log} 2>&1"
 
@@ -59,7 +59,7 @@ rule simulate_after_learning:
     params:
         library=lambda wildcards: INTENTS / f"p{wildcards.p}",
     shell:
-        "casa simulate after --config {input.config} --participant {wildcards.p} "
+        "exec casa simulate after --config {input.config} --participant {wildcards.p} "
         "--before {input.before} --library {params.library} --out {output} > {log} 2>&1"
 
 
@@ -77,7 +77,7 @@ rule learning_table:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa simulate learning-table --rows {input} --out {output} > {log} 2>&1"
+        "exec casa simulate learning-table --rows {input} --out {output} > {log} 2>&1"
 
 
 rule simulated_study:
@@ -103,5 +103,5 @@ rule case_study:
     conda:
         "../envs/casa.yaml"
     shell:
-        "casa case-study --config {input.config} --work {output.work} "
+        "exec casa case-study --config {input.config} --work {output.work} "
         "--steps {output.steps} --arbitration {output.arbitration} > {log} 2>&1"
