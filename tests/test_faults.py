@@ -117,6 +117,42 @@ def test_a_read_only_folder_fails_clearly_and_keeps_earlier_results(processed, c
         _writable(out)
 
 
+def test_every_command_reports_an_unwritable_output_without_a_traceback(tmp_path, capsys):
+    # A command that writes trial logs (the simulation) names the file it could not write
+    # and ends without a traceback; commands without a message of their own get one from
+    # casa_core.cli.main.
+    out = tmp_path / "before"
+    out.mkdir()
+    if not _unwritable(out):
+        _writable(out)
+        pytest.skip("this file system lets the folder be written whatever its mode")
+    try:
+        config = ["--config", str(ROOT / "config" / "config.yaml")]
+        config += ["--config", str(ROOT / "config" / "ci.yaml")]
+        capsys.readouterr()
+        code = main(["simulate", "before", *config, "--participant", "1", "--out", str(out)])
+        error = capsys.readouterr().err
+        assert code != 0 and error.startswith("casa simulate") and str(out) in error, error
+        assert "Traceback" not in error
+        assert list(out.iterdir()) == []
+    finally:
+        _writable(out)
+
+
+def test_main_turns_any_file_error_into_a_message(monkeypatch, capsys):
+    # The last resort for a handler without a message of its own: the file and the reason.
+    from casa_core.cli import data
+
+    def fails(args):
+        raise PermissionError(13, "Permission denied", "/lab/out/trials.csv")
+
+    monkeypatch.setattr(data, "_validate", fails)
+    assert main(["validate", "anything"]) == 1
+    error = capsys.readouterr().err
+    assert error.startswith("casa validate: cannot read or write /lab/out/trials.csv: ")
+    assert "Permission denied" in error and "Traceback" not in error
+
+
 # -- the DAG ------------------------------------------------------------------------------
 
 TARGET = ("data/processed/pilot/stats.csv", "--config", "simulate=false")

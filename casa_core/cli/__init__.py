@@ -82,3 +82,13 @@ def main(argv: list[str] | None = None) -> int:
         # An input file that cannot be used: the message names it and the key, no traceback.
         print(f"casa {args.command}: {error}", file=sys.stderr)
         return 2
+    except OSError as error:
+        # A file or folder the command could not read or write (missing, read-only, disk
+        # full); outputs are written atomically, so what was there before is unchanged.
+        where = f" {error.filename}" if error.filename else ""
+        print(
+            f"casa {args.command}: cannot read or write{where}: {error.strerror or error}; "
+            "files already there are unchanged",
+            file=sys.stderr,
+        )
+        return 1
