@@ -257,6 +257,8 @@ def test_a_run_killed_anywhere_and_rerun_gives_the_bytes_of_an_uninterrupted_run
     points = {
         # validate's casa command running
         "validating": lambda repo: any(" validate " in c for c in _processes_in(repo)),
+        # the tables being built from the validated logs
+        "processing": lambda repo: any(" process " in c for c in _processes_in(repo)),
         # after trials.csv, while the statistics (seconds long) are computed: a job left
         # running would still run when the check below looks
         "computing statistics": lambda repo: (
