@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from casa_core.cli._options import example
+
 #: One example per page, shown by each command's --help.
 _EXAMPLES = {
     "summary": "casa report summary --stats data/processed/simulated/stats.csv "
@@ -17,26 +19,23 @@ _EXAMPLES = {
 }
 
 
-def _epilog(*pages: str) -> str:
-    return "example:\n" + "\n".join(f"  {_EXAMPLES[page]}" for page in pages)
+def _example(*pages: str) -> dict:
+    """``add_parser`` keywords ending --help with the examples of ``pages``."""
+    return example(*(line for page in pages for line in _EXAMPLES[page].split("\n")))
 
 
 def register(commands) -> None:
     """Add this module's commands to the ``casa`` subcommands."""
-    import argparse
-
     command = commands.add_parser(
         "report",
         help="the HTML report's pages: results summary, rendered Markdown, browsable tables",
-        epilog=_epilog(*_EXAMPLES),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        **_example(*_EXAMPLES),
     )
     pages = command.add_subparsers(dest="page", metavar="PAGE", required=True)
     summary = pages.add_parser(
         "summary",
         help="per hypothesis, the paper-form and within-subjects tests (stats.csv)",
-        epilog=_epilog("summary"),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        **_example("summary"),
     )
     summary.add_argument("--stats", required=True, metavar="CSV", help="stats.csv")
     summary.add_argument("--dataset", required=True, help="the dataset's name, for the title")
@@ -46,8 +45,7 @@ def register(commands) -> None:
     markdown = pages.add_parser(
         "markdown",
         help="a Markdown file (e.g. stats.md) as HTML",
-        epilog=_epilog("markdown"),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        **_example("markdown"),
     )
     markdown.add_argument("markdown", metavar="MD")
     markdown.add_argument("--out", required=True, metavar="HTML")
@@ -55,8 +53,7 @@ def register(commands) -> None:
     table = pages.add_parser(
         "table",
         help="a processed table as a browsable HTML table",
-        epilog=_epilog("table"),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        **_example("table"),
     )
     table.add_argument("table", metavar="CSV")
     table.add_argument("--out", required=True, metavar="HTML")
