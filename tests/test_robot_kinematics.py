@@ -153,3 +153,35 @@ def test_scene_positions_have_an_inverse_kinematics_solution():
     for position, rot in poses:
         q = kin.inverse_kinematics(position, rot)
         np.testing.assert_allclose(kin.forward_kinematics(q)[:3, 3], position, atol=1e-5)
+
+
+# The original implementation's four reference configurations (degrees) and the link-7
+# positions (m) its JACO description gives them, as read from its code and sessions.
+ORIGINAL_REFERENCE_POSES = {
+    "start": ([180, 175, 180, 300, 180, 180, 190], (-0.376, 0.010, 0.446)),
+    "goal 0": ([150, 130, 160, 240, 180, 172, 280], (-0.548, -0.444, 0.424)),
+    "goal 1": ([210, 130, 200, 240, 180, 172, 280], (-0.534, 0.458, 0.430)),
+    "unknown goal": ([123, 155, 131, 284, 180, 176, 189], (0.043, -0.483, 0.447)),
+}
+
+
+@pytest.mark.parametrize("name", ORIGINAL_REFERENCE_POSES)
+def test_original_reference_configurations_reach_their_link7_positions(name, bullet):
+    degrees, expected = ORIGINAL_REFERENCE_POSES[name]
+    q = np.radians(degrees)
+    # The reference positions are given to 1 mm.
+    np.testing.assert_allclose(kin.link7_position(q), expected, atol=1e-3)
+    # pybullet's FK of our URDF puts link 7 (its link index 6) at the same point.
+    _set(bullet, q)
+    client, robot = bullet
+    link7 = p.getLinkState(robot, 6, computeForwardKinematics=True, physicsClientId=client)[4]
+    np.testing.assert_allclose(link7, expected, atol=1e-3)
+
+
+def test_end_effector_is_the_tool_point_a_constant_offset_from_link7_while_teleoperating():
+    # Our EE is 0.16 m from the link-7 origin along the tool's z axis, which teleoperation
+    # holds at (1, 1, 0)/sqrt 2 whatever rot is.
+    for rot in (0.0, 0.9, 1.8):
+        q = kin.inverse_kinematics([0.45, -0.22, 0.38], rot)
+        offset = kin.forward_kinematics(q)[:3, 3] - kin.link7_position(q)
+        np.testing.assert_allclose(offset, 0.16 * np.array([1, 1, 0]) / np.sqrt(2), atol=1e-6)

@@ -1,13 +1,22 @@
 """Forward kinematics, Jacobian and inverse kinematics of the Kinova JACO 7-DoF (j2s7s300).
 
-The joint origins are those of the JACO description the original implementation used
-(docs/departures.md lists where we differ from it); every arm joint turns about its
-local z axis. Our URDF ``j2s7s300.urdf`` is built from the same numbers, and the tests
-check this numpy forward kinematics against pybullet's.
+The joint origins are those of the JACO description the original implementation used;
+every arm joint turns about its local z axis, and joint angles mean what they mean on
+the original's (and Kinova's) arm: the tests put the original's four reference
+configurations at its link-7 positions to 1 mm. Our URDF ``j2s7s300.urdf`` is built
+from the same numbers, and the tests check this numpy forward kinematics against
+pybullet's.
 
-The end-effector (EE) frame is the ``tool`` frame, whose origin is where the cup is
-held. Its orientation is fixed during teleoperation except for the turn of the last
-joint, measured by the state's angle ``rot``:
+Two points of the hand have a name. The *link-7 origin* (:func:`link7_position`) is
+what the original implementation called the end effector: its costs, goals and PBA
+distances are measured there. Our *end effector* (EE) is the ``tool`` frame, 0.16 m
+further along the last joint's axis, where the cup is held; the state ``[x, y, z,
+rot]`` and the ``x, y, z`` of every casa-trial/1 log are its position. While the tool
+orientation is held (our teleoperation), the two points differ by a constant offset,
+so path lengths and distances are the same for both.
+
+The EE frame's orientation is fixed during teleoperation except for the turn of the
+last joint, measured by the state's angle ``rot``:
 
 * at ``rot = 0`` the tool's z axis (the last joint's axis, pointing away from the
   wrist) is horizontal, at 45 degrees between the base's +x and +y axes, and the
@@ -37,7 +46,7 @@ import numpy as np
 JOINT_ORIGINS: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...] = (
     ((0.0, 0.0, 0.15675), (0.0, np.pi, 0.0)),
     ((0.0, 0.0016, -0.11875), (-np.pi / 2, 0.0, np.pi)),
-    ((0.0, -0.205, 0.0), (-np.pi / 2, 0.0, 0.0)),
+    ((0.0, -0.205, 0.0), (np.pi / 2, 0.0, np.pi)),
     ((0.0, 0.0, -0.205), (np.pi / 2, 0.0, np.pi)),
     ((0.0, 0.2073, -0.0114), (-np.pi / 2, 0.0, np.pi)),
     ((0.0, 0.0, -0.10375), (np.pi / 2, 0.0, np.pi)),
@@ -70,7 +79,7 @@ EE_ROTATION_AT_ZERO = np.array(
 
 #: Seed of inverse kinematics: the elbow-up solution for the start pose of
 #: ``config/scene.yaml`` with the widest joint-limit margin among 300 random seeds.
-HOME_CONFIGURATION = np.array([-1.456, 4.48, 1.484, 4.785, -0.175, 2.329, 1.478])
+HOME_CONFIGURATION = np.array([-1.456, 4.48, 4.626, 4.785, -0.175, 2.329, 1.478])
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
@@ -136,6 +145,18 @@ def link_frames(q) -> np.ndarray:
 def forward_kinematics(q) -> np.ndarray:
     """Pose of the tool (end effector) in the base frame: a 4x4 homogeneous transform."""
     return link_frames(q)[7]
+
+
+def link7_position(q) -> np.ndarray:
+    """Position ``(3,)`` of the link-7 origin, the original implementation's end effector.
+
+    Examples
+    --------
+    >>> start = np.radians([180, 175, 180, 300, 180, 180, 190])  # the original's start
+    >>> link7_position(start).round(3)
+    array([-0.376,  0.01 ,  0.446])
+    """
+    return link_frames(q)[6][:3, 3].copy()
 
 
 def jacobian(q) -> np.ndarray:
