@@ -5,10 +5,18 @@ inference step (twice per second in the original, every ``dt``) it updates, per
 intent, the prefix cost incrementally, the optimal cost-to-go and the
 suboptimality, then beta_hat, the belief over intents, the most likely intent
 theta*, the user's control authority alpha, and whether the intent set looks
-misspecified. At every control tick :meth:`Assistant.act` blends the user's
-action with the robot's action u*, which tracks the cached optimal trajectory
-to theta* (replanned when theta* changes). The cost of a step is O(number of
-intents), independent of the steps so far.
+misspecified.
+
+Two rules say what counts as evidence. With no evidence yet (``t = 0``) nothing is
+inferred: the user has full control under every arbitration. At most ``T / dt``
+steps count (the horizon's worth): past T, confidence no longer grows with time
+alone, so the verdict on the same behaviour does not depend on how long the trial
+runs. Whether a step in which the user held no key counts is the option
+``idle_is_evidence``; the presets (:mod:`casa_core.presets`) choose it.
+
+At every control tick :meth:`Assistant.act` blends the user's action with the robot's
+action u*, which tracks the cached optimal trajectory to theta* (replanned when theta*
+changes). The cost of a step is O(number of intents), independent of the steps so far.
 """
 
 from __future__ import annotations
@@ -33,9 +41,9 @@ from casa_core.defaults import (
     K,
 )
 from casa_core.inference import _log_likelihood, _posterior
+from casa_core.vocabulary import EVIDENCE
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
-EVIDENCE = ("commanded", "executed")
 
 
 @dataclass(frozen=True)
@@ -61,6 +69,8 @@ class Inference:
         give for the same theta*, for comparing them on one trajectory.
     misspecified : bool
         True when evidence has been seen and every beta_hat is below epsilon.
+    evidence_steps : int
+        Steps of evidence the estimates rest on (at most ``T / dt``).
     """
 
     t: float
@@ -71,6 +81,7 @@ class Inference:
     alpha: float
     alpha_by_arbitration: dict = field(default_factory=dict)
     misspecified: bool = False
+    evidence_steps: int = 0
 
 
 class Assistant:
@@ -118,6 +129,13 @@ class Assistant:
     tick : float, default TICK
         Seconds each :meth:`act` is applied for (the 20 Hz control tick); with
         ``evidence="commanded"`` it turns the robot's share into displacement.
+    idle_is_evidence : bool, default False
+        Whether an inference step in which the user's action was zero at every
+        :meth:`act` counts as evidence. False: such a step leaves the evidence and
+        the suboptimalities as they were (the arm may still move, assisted), so that
+        standing still, which costs nothing under the path-length cost and so looks
+        optimal for every goal, never makes the robot confident. True: every step
+        counts, as in the original implementation.
 
     Raises
     ------
@@ -131,7 +149,7 @@ class Assistant:
     >>> intents = [GoalIntent("green", [0.3, 0.4, 0.0]), GoalIntent("red", [-0.4, 0.1, 0.2])]
     >>> assistant = Assistant(intents, arbitration="confidence")
     >>> assistant.reset([0.0, 0.0, 0.0, 0.0])
-    >>> step = assistant.update([0.015, 0.02, 0.0, 0.0])  # 0.025 m toward green
+    >>> step = assistant.update([0.015, 0.02, 0.0, 0.0], user_input=True)  # 2.5 cm to green
     >>> step.intent, step.alpha
     ('green', 1.0)
     >>> assistant.act([0.015, 0.02, 0.0, 0.0], np.zeros(4)).shape
@@ -154,6 +172,7 @@ class Assistant:
         rot_speed: float = ROT_SPEED,
         evidence: str = "commanded",
         tick: float = TICK,
+        idle_is_evidence: bool = False,
     ):
         if arbitration not in ARBITRATIONS:
             raise ValueError(f"arbitration must be one of {ARBITRATIONS}, got {arbitration!r}")
@@ -183,9 +202,14 @@ class Assistant:
         self.pba_distance, self.subopt_scale = pba_distance, subopt_scale
         self.horizon, self.dt, self.tick = horizon, dt, tick
         self.speed, self.rot_speed = speed, rot_speed
+        self.idle_is_evidence = bool(idle_is_evidence)
+        self.max_evidence = int(round(horizon / dt))
         self.names = names
         # The trial's state, set by reset(); None until then.
         self._steps = 0
+        self._evidence = 0
+        self._user_input = False
+        self._subopt = np.zeros(len(self.intents))
         self._last_state: np.ndarray | None = None
         self._prefix = np.zeros(len(self.intents))
         self._optimal = np.zeros(len(self.intents))
@@ -205,6 +229,9 @@ class Assistant:
         if state.ndim != 1 or not np.isfinite(state).all():
             raise ValueError(f"start state must be finite (one vector), got {state!r}")
         self._steps = 0
+        self._evidence = 0  # inference steps that counted as evidence
+        self._user_input = False  # any nonzero user action since the last step
+        self._subopt = np.zeros(len(self.intents))  # unscaled, at the last step
         self._last_state = state
         self._prefix = np.zeros(len(self.intents))
         self._optimal = np.array([i.cost_to_go(state, self.horizon) for i in self.intents])
@@ -214,15 +241,22 @@ class Assistant:
         self._robot_motion = np.zeros_like(state)  # robot's share since the last step
         self.latest = None
 
-    def update(self, state) -> Inference:
-        """Observe the state reached one inference step (``dt``) after the last one."""
+    def update(self, state, *, user_input: bool | None = None) -> Inference:
+        """Observe the state reached one inference step (``dt``) after the last one.
+
+        ``user_input`` says whether the user gave input during the step; by default,
+        whether :meth:`act` was given a nonzero user action since the last step. A
+        caller feeding a trajectory of the user's own (an analysis, a test) passes True.
+        """
         self._require_reset("update")
         state = np.asarray(state, dtype=float)
         if state.shape != self._last_state.shape or not np.isfinite(state).all():
             raise ValueError(f"state must be finite, of shape {self._last_state.shape}: {state!r}")
         self._steps += 1
-        t = self._steps
-        time_left = max(self.horizon - t * self.dt, 0.0)
+        time_left = max(self.horizon - self._steps * self.dt, 0.0)
+        gave_input = self._user_input if user_input is None else bool(user_input)
+        counts = self.idle_is_evidence or gave_input
+        self._user_input = False
         observed = state
         if self.evidence == "commanded" and self._robot_motion.any():
             observed = state - self._robot_motion
@@ -237,8 +271,15 @@ class Assistant:
             # (last, so that the planners warm start from its plan next time).
             at_observed, to_go = self._costs_to_go([observed, state], time_left).T
             self._prefix += at_observed - to_go
+        if counts:
+            self._evidence += 1
+            self._subopt = _suboptimality(self._prefix, to_go, self._optimal)
+        else:
+            # Not evidence: the suboptimality stays, and the prefix is rebased on it.
+            self._prefix = self._subopt + self._optimal - to_go
+        t = min(self._evidence, self.max_evidence)
         # The equations' unchecked cores: costs are finite and t, k, lam were checked once.
-        subopt = self.subopt_scale * _suboptimality(self._prefix, to_go, self._optimal)
+        subopt = self.subopt_scale * self._subopt
         betas = _beta_hat(subopt, t, self.k, self.lam)
         inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
         belief = _posterior(_log_likelihood(subopt, inference_beta, t, self.k))
@@ -252,20 +293,23 @@ class Assistant:
             # One intent: a belief of 1 by construction, no evidence; the user keeps control.
             "belief": float(_alpha_belief(float(belief[star]), n)) if n > 1 else 1.0,
         }
+        if t == 0:  # nothing inferred yet: no arbitration assists
+            alphas = dict.fromkeys(alphas, 1.0)
         alpha = 1.0 if self.arbitration == "none" else alphas[self.arbitration]
         if star != self._plan_intent:
             self._plan = self.intents[star].optimal_trajectory(state, time_left)
             self._plan_intent = star
-            self._plan_origin = t
+            self._plan_origin = self._steps
         self.latest = Inference(
-            t=t * self.dt,
+            t=self._steps * self.dt,
             beta=dict(zip(self.names, betas.tolist(), strict=True)),
             belief=dict(zip(self.names, belief.tolist(), strict=True)),
             suboptimality=dict(zip(self.names, np.atleast_1d(subopt).tolist(), strict=True)),
             intent=self.names[star],
             alpha=alpha,
             alpha_by_arbitration=alphas,
-            misspecified=bool((betas < self.epsilon).all()),
+            misspecified=bool(t > 0 and (betas < self.epsilon).all()),
+            evidence_steps=t,
         )
         return self.latest
 
@@ -296,17 +340,24 @@ class Assistant:
         velocity[3] = np.clip(velocity[3], -self.rot_speed, self.rot_speed)
         return velocity
 
-    def act(self, state, user_action, elapsed_in_step: float = 0.0) -> np.ndarray:
+    def act(
+        self, state, user_action, elapsed_in_step: float = 0.0, *, alpha: float | None = None
+    ) -> np.ndarray:
         """The blended action alpha T(a) + (1 - alpha) u*, applied even with no key held.
 
-        Before the first inference step the user has full control.
+        Before the first inference step the user has full control. ``alpha``, if
+        given, is the authority actually applied this tick instead of the latest
+        inference's: replaying a log (:mod:`casa_core.replay`) gives the logged one,
+        so that the robot's share removed from the evidence is the share it had.
         """
         self._require_reset("act")
         user_action = np.asarray(user_action, dtype=float)
+        if user_action.any():
+            self._user_input = True
         if self.latest is None:
             return user_action.copy()
         robot = self.robot_action(state, elapsed_in_step)
-        alpha = self.latest.alpha
+        alpha = self.latest.alpha if alpha is None else float(alpha)
         if self.evidence == "commanded" and alpha < 1.0:
             self._robot_motion += (1.0 - alpha) * (robot - user_action) * self.tick
         return blend(alpha, user_action, robot)

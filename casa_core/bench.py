@@ -70,7 +70,7 @@ def _fed_assistant(intents, states, late_step, user_action) -> Assistant:
     fed = Assistant(intents, arbitration="confidence")
     fed.reset(states[0])
     for state in states[1:late_step]:
-        fed.update(state)
+        fed.update(state, user_input=True)
         # The robot's share of the motion, which the next step removes from the evidence.
         fed.act(state, user_action)
     return fed
@@ -136,7 +136,7 @@ def time_assistance_steps(
                 # A copy of the fed assistant (caches and warm starts included) takes it.
                 assistant = copy.deepcopy(assistant_fed)
                 start = time.thread_time_ns()
-                assistant.update(state)
+                assistant.update(state, user_input=True)
                 assistant.act(state, user_action)
                 if repeat >= warmup:
                     times[index].append((time.thread_time_ns() - start) / 1e3)

@@ -31,7 +31,7 @@ SPEED = 0.05
 ROT_SPEED = 0.5
 #: The control tick, seconds (20 Hz).
 TICK = 0.05
-#: Cost per metre of end-effector path: the original implementation's 50 / 0.22, rounded.
-COST_PER_METRE = 227.0
+#: Cost per metre of end-effector path: the original implementation's 50 / 0.22 (227.27...).
+COST_PER_METRE = 50 / 0.22
 #: Demonstrations asked for each new intent (the paper's 5).
 DEMONSTRATIONS = 5

@@ -78,11 +78,10 @@ class GoalIntent(Intent):
     Two cost forms, chosen with ``cost``:
 
     ``"path_length"`` (the original implementation's; see docs/departures.md)
-        C(xi) = scale * (sum of ||x_{i+1} - x_i||) + final_weight * ||x_N - g||:
-        the end-effector path length plus a penalty on the distance left at the
-        horizon. The optimum drives straight at ``speed``; its cost-to-go from
-        distance d with time tau left is
-        ``scale * min(d, v tau) + final_weight * max(d - v tau, 0)``.
+        C(xi) = scale * (sum of ||x_{i+1} - x_i||): the end-effector path length.
+        Its cost-to-go is the straight line to the goal, ``scale * d`` from distance
+        d, whatever the time left: the time left sets how many states the optimal
+        trajectory has, not its cost.
     ``"distance_sum"`` (the paper's, Sec. II-A)
         C(xi) = scale * dt * sum_i ||x_i - g|| over the states after the start,
         i.e. the time integral of the distance to the goal. The optimum drives
@@ -90,7 +89,8 @@ class GoalIntent(Intent):
         left and m = min(n, floor(d / s)) its cost-to-go is
         ``scale * dt * (m d - s m (m + 1) / 2)``.
 
-    Only the position counts; the rotation is held.
+    Only the position counts; the rotation is held. Under both, the robot's optimal
+    trajectory (:meth:`optimal_trajectory`) drives straight to the goal at ``speed``.
 
     Parameters
     ----------
@@ -100,15 +100,12 @@ class GoalIntent(Intent):
         Goal position in the robot base frame, metres.
     cost : {"path_length", "distance_sum"}, default "path_length"
     speed : float, default SPEED
-        Fastest end-effector speed the optimum may use, m/s (the keyboard's 0.05).
+        Fastest end-effector speed of the optimal trajectory, m/s (the keyboard's 0.05).
     dt : float, default DT
         Seconds between trajectory states (0.5 in the original).
     scale : float, default COST_PER_METRE
-        Cost per metre (path_length; the original's ~227) or per metre-second
+        Cost per metre (path_length; the original's 50 / 0.22) or per metre-second
         (distance_sum).
-    final_weight : float, optional
-        Cost per metre left at the horizon (path_length); default ``2 * scale``
-        (our choice: the original's value is not known).
 
     Examples
     --------
@@ -133,7 +130,6 @@ class GoalIntent(Intent):
         speed: float = SPEED,
         dt: float = DT,
         scale: float = COST_PER_METRE,
-        final_weight: float | None = None,
     ):
         if cost not in COST_FORMS:
             raise ValueError(f"cost must be one of {COST_FORMS}, got {cost!r}")
@@ -147,7 +143,6 @@ class GoalIntent(Intent):
         self.speed = float(speed)
         self.dt = float(dt)
         self.scale = float(scale)
-        self.final_weight = 2.0 * self.scale if final_weight is None else float(final_weight)
 
     def __repr__(self) -> str:
         return f"GoalIntent({self.name!r}, goal={self.goal.tolist()}, cost={self.cost!r})"
@@ -169,18 +164,16 @@ class GoalIntent(Intent):
 
         Examples
         --------
-        >>> green = GoalIntent("green", [0.3, 0.4, 0.0], scale=1.0, final_weight=2.0)
-        >>> green.cost_to_go(np.zeros(4), 15.0)  # 0.5 m reachable in 10 s: the path length
+        >>> green = GoalIntent("green", [0.3, 0.4, 0.0], scale=1.0)
+        >>> green.cost_to_go(np.zeros(4), 15.0)  # the straight 0.5 m to the goal
         0.5
-        >>> round(green.cost_to_go(np.zeros(4), 4.0), 12)  # 0.2 m in 4 s, 0.3 m left x 2
-        0.8
+        >>> green.cost_to_go(np.zeros(4), 0.0)  # whatever the time left
+        0.5
         """
         d = float(np.linalg.norm(np.asarray(state[:3], dtype=float) - self.goal))
-        time_left = max(float(time_left), 0.0)
         if self.cost == "path_length":
-            reach = self.speed * time_left
-            return self.scale * min(d, reach) + self.final_weight * max(d - reach, 0.0)
-        n = int(np.floor(time_left / self.dt + 1e-9))
+            return self.scale * d
+        n = int(np.floor(max(float(time_left), 0.0) / self.dt + 1e-9))
         step = self.speed * self.dt
         m = min(n, int(np.floor(d / step + 1e-12)))
         return self.scale * self.dt * (m * d - step * m * (m + 1) / 2.0)

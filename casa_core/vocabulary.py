@@ -86,6 +86,13 @@ TASK_CONDITIONS = {
 }
 
 
+#: The inference presets (casa_core.presets): this project's, the original
+#: implementation's, the paper's as written.
+PRESET_NAMES = ("casa", "original", "paper")
+#: What the trajectory of inference is: the user's commanded motion or the arm's executed one.
+EVIDENCE = ("commanded", "executed")
+
+
 def condition_of(method: str, phase: str) -> str | None:
     """The study condition of a trial, in the paper's words; None for unanalysed phases.
 

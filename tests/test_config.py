@@ -12,7 +12,7 @@ import yaml
 from test_logs_synthetic import ROOT, write_dataset
 from test_workflow import ENV, copy_workflow, snakemake
 
-from casa_core import assistant, defaults
+from casa_core import assistant, defaults, presets
 from casa_core.config import (
     DEFAULT_CONFIG,
     SCHEMA_PATH,
@@ -57,7 +57,12 @@ def test_the_schema_defaults_are_the_models():
     parameters = inspect.signature(assistant.Assistant).parameters
     for section in ("simulation", "case_study"):
         assert default(f"{section}.epsilon") == defaults.EPSILON
-        assert default(f"{section}.evidence") == parameters["evidence"].default
+    # The default preset's evidence is the assistant's default; the config overrides none.
+    assert default("inference.preset") == presets.DEFAULT_PRESET
+    chosen = presets.preset(default("inference.preset"))
+    assert chosen.evidence == parameters["evidence"].default
+    assert chosen.idle_is_evidence == parameters["idle_is_evidence"].default
+    assert default("inference.evidence") is None
     assert default("simulation.demonstrations") == defaults.DEMONSTRATIONS
 
 
@@ -75,7 +80,8 @@ def test_defaults_are_filled_in_from_the_schema():
     data = yaml.safe_load(CONFIG.read_text())
     for key in ("allow_invalid", "simulate"):
         del data[key]
-    for key in ("max_duration", "demonstrations", "demonstrations_when", "epsilon", "evidence"):
+    del data["inference"]
+    for key in ("max_duration", "demonstrations", "demonstrations_when", "epsilon"):
         del data["simulation"][key]
     config = validate_config(data)
     assert config == load_config(CONFIG)
@@ -101,7 +107,8 @@ def test_defaults_are_filled_in_from_the_schema():
             {"simulation": {"population": {"deadband": {"median": 0.01, "sgima": 0.1}}}},
             "overlay.yaml: simulation.population.deadband.sgima: unknown key",
         ),
-        ({"case_study": {"evidence": "felt"}}, "case_study.evidence: must be one of commanded"),
+        ({"inference": {"evidence": "felt"}}, "inference.evidence: must be one of commanded"),
+        ({"inference": {"preset": "orignal"}}, "inference.preset: must be one of casa, original"),
         ({"simulation": {"participants": 0}}, "simulation.participants: must be >= 1, got 0"),
         ({"simulation": {"epsilon": "high"}}, "simulation.epsilon: must be a number, got 'high'"),
         ({"simulation": 3}, "overlay.yaml: simulation: must be a mapping, got 3"),

@@ -34,12 +34,13 @@ def test_straight_line_to_the_goal_has_zero_suboptimality(cost):
         assert prefix + to_go - optimal == pytest.approx(0.0, abs=1e-9)
 
 
-def test_path_length_closed_forms():
-    intent = GoalIntent("g", GOAL, cost="path_length", scale=227.0, final_weight=500.0)
-    # reachable: 0.5 m at 0.05 m/s needs 10 s <= 15 s -> 227 * 0.5
-    assert intent.cost_to_go(START, 15.0) == pytest.approx(113.5)
-    # 4 s left reaches 0.2 m: 227 * 0.2 + 500 * 0.3
-    assert intent.cost_to_go(START, 4.0) == pytest.approx(45.4 + 150.0)
+def test_path_length_cost_to_go_is_the_straight_line_whatever_the_time_left():
+    intent = GoalIntent("g", GOAL, cost="path_length", scale=227.0)
+    # 0.5 m at 227 per metre, with time enough (10 s at 0.05 m/s) or not
+    for time_left in (15.0, 4.0, 0.0):
+        assert intent.cost_to_go(START, time_left) == pytest.approx(113.5)
+    # the default scale is the original's 50 / 0.22 per metre
+    assert GoalIntent("g", GOAL).cost_to_go(START, 15.0) == pytest.approx(0.5 * 50 / 0.22)
 
 
 def test_distance_sum_closed_form_matches_its_optimal_trajectory():
@@ -87,7 +88,7 @@ def make_assistant(arbitration="confidence", **kwargs):
 def test_known_goal_confidence_rises_and_alpha_falls():
     # Paper Sec. IV-C: moving optimally to a known goal, its beta_hat rises and alpha falls.
     assistant = make_assistant()
-    steps = [assistant.update(s) for s in straight_line(GOAL, 16)[1:]]
+    steps = [assistant.update(s, user_input=True) for s in straight_line(GOAL, 16)[1:]]
     green = [step.beta["green"] for step in steps]
     assert (np.diff(green) > 0).all()
     assert steps[-1].beta["purple"] < 1.0 < steps[-1].beta["green"]
@@ -101,7 +102,7 @@ def test_unknown_goal_is_flagged_misspecified_and_casa_gives_control_back():
     # Moving to a goal far from both known ones: every beta_hat drops below epsilon.
     assistant = make_assistant()
     unknown = np.array([0.0, -0.5, 0.0])
-    steps = [assistant.update(s) for s in straight_line(unknown, 16)[1:]]
+    steps = [assistant.update(s, user_input=True) for s in straight_line(unknown, 16)[1:]]
     assert steps[-1].misspecified
     assert steps[-1].alpha == 1.0
     # belief arbitration would still hand control to the robot (paper, Fig. alpha_methods)
@@ -112,7 +113,7 @@ def test_pba_fixes_beta_at_one_for_inference_and_arbitrates_on_distance():
     assistant = make_assistant("distance", pba_distance=0.55)
     step = None
     for state in straight_line(GOAL, 10)[1:]:
-        step = assistant.update(state)
+        step = assistant.update(state, user_input=True)
     distance = np.linalg.norm(straight_line(GOAL, 10)[-1, :3] - GOAL)
     assert step.alpha == pytest.approx(min(1.0, distance / 0.55))
 
@@ -120,7 +121,7 @@ def test_pba_fixes_beta_at_one_for_inference_and_arbitrates_on_distance():
 def test_no_assistance_leaves_the_user_in_control():
     assistant = make_assistant("none")
     for state in straight_line(GOAL, 5)[1:]:
-        assistant.update(state)
+        assistant.update(state, user_input=True)
     user = np.array([0.0, 0.05, 0.0, 0.0])
     np.testing.assert_allclose(assistant.act(straight_line(GOAL, 5)[-1], user), user)
 
@@ -129,7 +130,7 @@ def test_blended_action_moves_toward_the_most_likely_goal_when_confident():
     assistant = make_assistant()
     states = straight_line(GOAL, 12)
     for state in states[1:]:
-        assistant.update(state)
+        assistant.update(state, user_input=True)
     action = assistant.act(states[-1], np.zeros(4))  # no key held: the robot still assists
     direction = (GOAL - states[-1, :3]) / np.linalg.norm(GOAL - states[-1, :3])
     assert action[:3] @ direction > 0
@@ -143,7 +144,7 @@ def test_assistant_is_incremental_and_matches_batch_costs():
     states = np.cumsum(rng.normal(scale=0.02, size=(12, 4)), axis=0)
     states[0] = START
     for state in states[1:]:
-        step = assistant.update(state)
+        step = assistant.update(state, user_input=True)
     intent = assistant.intents[0]
     expected = (
         intent.prefix_cost(states)
@@ -207,7 +208,10 @@ def test_belief_arbitration_with_one_intent_leaves_the_user_in_control():
 
     confidence, belief = one_intent("confidence"), one_intent("belief")
     for state in straight_line(GOAL, 6)[1:]:
-        by_confidence, by_belief = confidence.update(state), belief.update(state)
+        by_confidence, by_belief = (
+            confidence.update(state, user_input=True),
+            belief.update(state, user_input=True),
+        )
         assert by_belief.belief == {"green": 1.0} and by_belief.alpha == 1.0
         assert by_confidence.alpha_by_arbitration["belief"] == 1.0
     assert by_confidence.alpha < 1.0  # confidence arbitration still assists a confident user
@@ -239,7 +243,7 @@ def test_assistant_needs_reset_before_a_trial():
     assert assistant.latest is None
     user = np.array([0.05, 0.0, 0.0, 0.0])
     np.testing.assert_array_equal(assistant.act(START, user), user)  # full control before t = 1
-    assert assistant.update(START).t == 0.5
+    assert assistant.update(START, user_input=True).t == 0.5
     assert assistant.latest is not None
 
 

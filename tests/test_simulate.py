@@ -38,7 +38,8 @@ def test_before_learning_writes_valid_logs_for_the_whole_protocol(tmp_path):
     assert len(stems) == 10 + 2  # familiarization, 3 + 3 + 3 conditions, 1 demo per task
     assert validate_paths([tmp_path]) == []
     meta, _ = read_trial(tmp_path / "unknown_goal_before_learning_CASA")
-    assert meta["notes"].startswith("evidence: commanded; misspecification detected: ")
+    assert meta["inference"] == {"preset": "casa", "evidence": "commanded"}
+    assert meta["notes"].startswith("misspecification detected: ")
     again = tmp_path / "again"
     simulate.simulate_before_learning(0, SCENE, simulation=settings, out_dir=again)
     for stem in stems:  # the same seed gives the same logs, byte for byte

@@ -11,6 +11,7 @@ import pytest
 
 from casa_core.cli import build_parser, main
 from casa_core.io import read_trial, validate_paths
+from casa_core.presets import preset
 from casa_core.robot import teleop
 from casa_core.scene import load_scene
 from casa_core.study.key_sources import ScriptedKeys
@@ -257,16 +258,18 @@ def test_misspecification_in_teleop_asks_for_and_records_demonstrations(
     assert (frame["alpha"] == 1.0).all()  # demonstrations are unassisted
 
 
-@pytest.mark.parametrize("evidence", [None, "executed"])
-def test_the_log_says_what_inference_observed(scene, tmp_path, evidence):
-    # `casa teleop --evidence` reaches the assistant, and the log's notes record it
-    # (the Assistant's default, "commanded", when not given).
+@pytest.mark.parametrize(
+    ("name", "evidence", "expected"),
+    [("casa", None, "commanded"), ("casa", "executed", "executed"), ("original", None, "executed")],
+)
+def test_the_log_says_what_inference_observed(scene, tmp_path, name, evidence, expected):
+    # `casa teleop --preset/--evidence` reach the assistant, and the log's metadata
+    # records them (the preset's evidence when --evidence is not given).
     args = ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "a"]
     parsed = build_parser().parse_args(
-        [*args, "--out", "d", *(["--evidence", evidence] if evidence else [])]
+        [*args, "--out", "d", "--preset", name, *(["--evidence", evidence] if evidence else [])]
     )
-    assert parsed.evidence == evidence
-    options = {"evidence": evidence} if evidence else None
+    assert (parsed.preset, parsed.evidence) == (name, evidence)
     stem = run_teleop(
         scene,
         "known_goal",
@@ -276,9 +279,9 @@ def test_the_log_says_what_inference_observed(scene, tmp_path, evidence):
         gui=False,
         key_source=ScriptedKeys([(1.0, ["y+"])]),
         countdown=0,
-        assistant_options=options,
+        inference=preset(name, evidence=evidence),
     )
     meta, _ = read_trial(stem)
-    assert meta["notes"] == f"evidence: {evidence or 'commanded'}"
+    assert meta["inference"] == {"preset": name, "evidence": expected}
     with pytest.raises(SystemExit):
         build_parser().parse_args([*args, "--out", "d", "--evidence", "robot"])

@@ -31,8 +31,8 @@ def _add_teleop(commands) -> None:
         ),
     )
     # The model's defaults, written once in the assistant.
-    from casa_core.assistant import EVIDENCE
     from casa_core.defaults import DEMONSTRATIONS, EPSILON
+    from casa_core.presets import DEFAULT_PRESET
 
     command.add_argument("--task", required=True, choices=vocabulary.TASKS)
     command.add_argument("--method", required=True, choices=vocabulary.METHODS)
@@ -66,20 +66,29 @@ def _add_teleop(commands) -> None:
         help="misspecification threshold (default %(default)s)",
     )
     command.add_argument(
+        "--preset",
+        choices=vocabulary.PRESET_NAMES,
+        default=DEFAULT_PRESET,
+        help="how the assistant infers (docs/departures.md): this project's choices, the "
+        "original implementation's or the paper's as written (default %(default)s)",
+    )
+    command.add_argument(
         "--evidence",
-        choices=EVIDENCE,
-        help="what inference observes: the user's commanded motion (the default) or the "
-        "arm's executed motion, the robot's share included (the original implementation's)",
+        choices=vocabulary.EVIDENCE,
+        help="what inference observes, over the preset's choice: the user's commanded motion "
+        "or the arm's executed motion, the robot's share included",
     )
     command.set_defaults(func=_teleop)
 
 
 def _teleop(args) -> int:
+    from casa_core.presets import preset
     from casa_core.scene import load_scene
     from casa_core.study.closed_loop import trial_intents
     from casa_core.study.teleop_session import teleop_session
 
     scene = load_scene(args.scene)  # a SceneError is reported by casa_core.cli.main
+    inference = preset(args.preset, evidence=args.evidence)
     try:
         stems, detected = teleop_session(
             scene,
@@ -91,8 +100,8 @@ def _teleop(args) -> int:
             epsilon=args.epsilon,
             phase=args.phase,
             max_duration=args.max_duration,
-            intents=trial_intents(scene, args.intent),
-            assistant_options={"evidence": args.evidence} if args.evidence else None,
+            intents=trial_intents(scene, args.intent, inference=inference),
+            inference=inference,
         )
     except (FileExistsError, RuntimeError, ValueError) as error:
         print(f"casa teleop: {error}", file=sys.stderr)

@@ -114,11 +114,12 @@ def _run_stage(args) -> int:
         return 0
     config, scene = _load_config(args)
     simulation = config["simulation"]
+    inference = simulate.inference_preset(config)
     index = args.participant - 1
     pid = simulate.participant_id(index)
     if args.stage == "before":
         written = simulate.simulate_before_learning(
-            index, scene, simulation=simulation, out_dir=Path(args.out)
+            index, scene, simulation=simulation, out_dir=Path(args.out), inference=inference
         )
     elif args.stage == "learn":
         row = simulate.learn_from_demonstrations(
@@ -140,6 +141,7 @@ def _run_stage(args) -> int:
             learned=learned,
             before_dir=Path(args.before),
             out_dir=Path(args.out),
+            inference=inference,
         )
     print(f"casa simulate {args.stage}: participant {pid}, {len(written)} file(s)")
     return 0
@@ -174,7 +176,10 @@ def _case_study(args) -> int:
     config, scene = _load_config(args)
     try:
         steps, arbitration = simulate.run_case_study(
-            scene, config["case_study"], work_dir=Path(args.work)
+            scene,
+            config["case_study"],
+            work_dir=Path(args.work),
+            inference=simulate.inference_preset(config),
         )
     except (LogError, OSError, ValueError) as error:
         print(f"casa case-study: {error}", file=sys.stderr)

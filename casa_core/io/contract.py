@@ -74,7 +74,7 @@ SURVEYS_NAME = "surveys.csv"
 
 #: Metadata keys every trial has, and the ones it may have.
 META_REQUIRED = ("schema", "participant", "task", "method", "phase", "source")
-META_OPTIONAL = ("intents", "seed", "started_at", "notes", "max_duration")
+META_OPTIONAL = ("intents", "seed", "started_at", "notes", "max_duration", "inference")
 #: The keys that name a participant's condition (a trial, or a survey answer's subject).
 CONDITION_KEYS = ("participant", "task", "method", "phase")
 #: Metadata keys whose value is one of a fixed set, in the order they are checked.

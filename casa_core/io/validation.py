@@ -47,6 +47,7 @@ from casa_core.io.contract import (
     TIME_RANGE,
 )
 from casa_core.io.problems import LogError, Problem
+from casa_core.vocabulary import EVIDENCE, PRESET_NAMES
 
 __all__ = [
     "LogError",
@@ -143,6 +144,16 @@ def _positive_number(value, meta: dict) -> str | None:
     return f"is {value!r}, expected a positive number of seconds"
 
 
+def _inference(value, meta: dict) -> str | None:
+    allowed = {"preset": PRESET_NAMES, "evidence": EVIDENCE}
+    if not isinstance(value, dict) or set(value) != set(allowed):
+        return 'expected {"preset": ..., "evidence": ...}'
+    for key, names in allowed.items():
+        if value[key] not in names:
+            return f"{key} is {value[key]!r}, expected one of {', '.join(names)}"
+    return None
+
+
 #: The metadata rules after the required and unknown keys, in the order they are
 #: reported: (key, rule, check). A check runs when its key is present.
 META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
@@ -155,6 +166,7 @@ META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
     ("intents", "intent-names", _intent_names),
     ("max_duration", "positive-number", _positive_number),
     ("seed", "integer", _integer),
+    ("inference", "inference-settings", _inference),
 )
 
 

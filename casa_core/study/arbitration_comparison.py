@@ -32,7 +32,7 @@ def compare_arbitrations(assistant: Assistant, trajectory: np.ndarray) -> pd.Dat
     n = len(assistant.names)
     rows = [(0.0, name, 1.0 / n, 0.0, 1.0, 1.0, 1.0) for name in assistant.names]
     for state in trajectory[1:]:
-        step = assistant.update(state)
+        step = assistant.update(state, user_input=True)  # the trajectory is the user's
         alphas = step.alpha_by_arbitration
         for name in assistant.names:
             rows.append(

@@ -28,6 +28,7 @@ from casa_core.assistant import Assistant
 from casa_core.defaults import DT
 from casa_core.intents import GoalIntent, Intent
 from casa_core.io import write_trial
+from casa_core.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.robot.keys import check_keys, format_keys, keys_to_action
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import Scene
@@ -72,20 +73,29 @@ def known_goal_intents(scene: Scene, names: Sequence[str] = KNOWN_GOALS, **optio
     return [GoalIntent(name, scene.goals[name], **options) for name in names]
 
 
-def trial_intents(scene: Scene, learned: Sequence[Path | str] = ()) -> list:
+def trial_intents(
+    scene: Scene, learned: Sequence[Path | str] = (), *, inference: Preset | str = DEFAULT_PRESET
+) -> list:
     """What the robot knows: the known goals, then each learned intent file (casa-intent/1).
+
+    The goals' cost is the one of the ``inference`` preset (:mod:`casa_core.presets`).
 
     Raises
     ------
     casa_core.library.LibraryError
         (a ``ValueError``) naming a learned-intent file that cannot be used.
     """
-    intents = known_goal_intents(scene)
+    intents = known_goal_intents(scene, **as_preset(inference).goal_options())
     if learned:
         from casa_core.library import load_intent  # torch and the IRL code load only if needed
 
         intents += [load_intent(path).intent for path in learned]
     return intents
+
+
+def as_preset(inference: Preset | str) -> Preset:
+    """The preset itself, or the preset of that name."""
+    return inference if isinstance(inference, Preset) else preset(inference)
 
 
 def default_phase(task: str) -> str:
@@ -114,6 +124,7 @@ def run_trial(
     source_kind: str = "simulated",
     max_duration: float = 30.0,
     sim: ArmSimulation | None = None,
+    inference: Preset | str = DEFAULT_PRESET,
     assistant_options: dict | None = None,
     on_tick: Callable[[float, np.ndarray, frozenset, float], None] | None = None,
     seed: int | None = None,
@@ -132,7 +143,8 @@ def run_trial(
     participant : str
         Participant id written to the log.
     intents : sequence of Intent, optional
-        What the robot knows; default the known goals green and purple.
+        What the robot knows; default the known goals green and purple, with the
+        goal cost of the ``inference`` preset.
     phase : str, optional
         Log phase; default :func:`default_phase` of the task.
     source_kind : {"simulated", "human"}
@@ -140,8 +152,12 @@ def run_trial(
         Seconds after which the trial stops even if the source is not done.
     sim : ArmSimulation, optional
         Simulation to run in (e.g. a window); default a new headless one, closed after.
+    inference : Preset or str, default "casa"
+        The inference preset (:mod:`casa_core.presets`): the assistant's evidence,
+        prior, suboptimality scale and goal cost.
     assistant_options : dict, optional
-        Extra keyword arguments of :class:`~casa_core.assistant.Assistant`.
+        Extra keyword arguments of :class:`~casa_core.assistant.Assistant`, over the
+        preset's.
     on_tick : callable, optional
         ``on_tick(t, state, keys, alpha)`` after each logged tick (windows, pacing).
     seed : int, optional
@@ -154,7 +170,10 @@ def run_trial(
     if method not in METHOD_ARBITRATION:
         raise ValueError(f"unknown method {method!r}; expected one of {list(METHOD_ARBITRATION)}")
     phase = default_phase(task) if phase is None else phase
-    intents = known_goal_intents(scene) if intents is None else list(intents)
+    inference = as_preset(inference)
+    if intents is None:
+        intents = known_goal_intents(scene, **inference.goal_options())
+    intents = list(intents)
     teleop = scene.teleop
     ticks_per_inference = int(round(DT / teleop.dt))
     if ticks_per_inference < 1 or abs(ticks_per_inference * teleop.dt - DT) > 1e-9:
@@ -169,7 +188,7 @@ def run_trial(
         speed=teleop.speed,
         rot_speed=teleop.rot_speed,
         tick=teleop.dt,
-        **(assistant_options or {}),
+        **{**inference.assistant_options(), **(assistant_options or {})},
     )
     own_sim = sim is None
     sim = ArmSimulation(scene) if own_sim else sim
@@ -189,8 +208,8 @@ def run_trial(
         "intents": [intent.name for intent in intents],
         "max_duration": float(max_duration),  # so a reader can tell a trial that ran out
     }
-    if assistant.arbitration != "none":  # what inference observed (Assistant, evidence)
-        meta["notes"] = f"evidence: {assistant.evidence}"
+    # What inference assumed, so that a replay can redo it (casa_core.replay).
+    meta["inference"] = {"preset": inference.name, "evidence": assistant.evidence}
     if seed is not None:
         meta["seed"] = int(seed)
     return TrialResult(meta=meta, frame=pd.DataFrame(rows))

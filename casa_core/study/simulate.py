@@ -20,9 +20,10 @@ import pandas as pd
 from casa_core import metrics
 from casa_core.defaults import DEMONSTRATIONS
 from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_trial, write_surveys
+from casa_core.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.scene import Scene
 from casa_core.study import likert, protocol
-from casa_core.study.closed_loop import known_goal_intents, run_trial, trial_intents
+from casa_core.study.closed_loop import as_preset, known_goal_intents, run_trial, trial_intents
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
 from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import UNANALYSED_PHASES, UNKNOWN_TASKS
@@ -68,12 +69,19 @@ def participant_params(index: int, simulation: dict) -> ParticipantParams:
     return draw_participants(1, simulation["population"], rng)[0]
 
 
-def assistant_options(settings: dict) -> dict:
-    """Settings of the study's :class:`~casa_core.assistant.Assistant` found in the config."""
-    return {key: settings[key] for key in ("evidence",) if key in settings}
+def inference_preset(config: dict) -> Preset:
+    """The inference preset of a workflow config's ``inference`` block.
+
+    Examples
+    --------
+    >>> inference_preset({"inference": {"preset": "original", "evidence": None}}).evidence
+    'executed'
+    """
+    settings = config["inference"]
+    return preset(settings["preset"], evidence=settings["evidence"])
 
 
-def _run(scene, spec, settings, params, rng, pid, sim, intents=None):
+def _run(scene, spec, settings, params, rng, pid, sim, inference, intents=None):
     reference = intended_trajectory(spec.task, scene)
     source = SimulatedParticipant(params, reference, rng=rng, tick=scene.teleop.dt)
     result = run_trial(
@@ -86,7 +94,7 @@ def _run(scene, spec, settings, params, rng, pid, sim, intents=None):
         phase=spec.phase,
         max_duration=settings["max_duration"],
         sim=sim,
-        assistant_options=assistant_options(settings),
+        inference=inference,
         seed=int(settings["seed"]),
     )
     return result
@@ -100,6 +108,7 @@ def simulate_before_learning(
     out_dir: Path,
     params: ParticipantParams | None = None,
     pid: str | None = None,
+    inference: Preset | str = DEFAULT_PRESET,
 ) -> list[Path]:
     """Phases 1-3 and the demonstrations of one participant; returns the logs' stems.
 
@@ -122,7 +131,7 @@ def simulate_before_learning(
         detected = {}
         for stream, spec in enumerate(specs, start=1):
             rng = np.random.default_rng([seed, index, stream])
-            result = _run(scene, spec, simulation, params, rng, pid, sim)
+            result = _run(scene, spec, simulation, params, rng, pid, sim, inference)
             if spec.method == "CASA" and spec.phase == "before_learning":
                 detected[spec.task] = protocol.misspecification_detected(result.frame, epsilon)
                 note = f"misspecification detected: {detected[spec.task]}"
@@ -136,7 +145,7 @@ def simulate_before_learning(
             for spec in protocol.demonstrations(task, simulation["demonstrations"]):
                 rng = np.random.default_rng([seed, index, stream])
                 stream += 1
-                result = _run(scene, spec, simulation, params, rng, pid, sim)
+                result = _run(scene, spec, simulation, params, rng, pid, sim, inference)
                 result.write(out_dir / spec.stem)
                 written.append(out_dir / spec.stem)
     return written
@@ -192,6 +201,7 @@ def simulate_after_learning(
     out_dir: Path,
     params: ParticipantParams | None = None,
     pid: str | None = None,
+    inference: Preset | str = DEFAULT_PRESET,
 ) -> list[Path]:
     """Phase 4 (CASA with every learned intent), then ``surveys.csv`` for all conditions."""
     from casa_core.robot.sim import ArmSimulation
@@ -203,11 +213,13 @@ def simulate_after_learning(
     out_dir = Path(out_dir)
     written = []
     if learned:
-        intents = trial_intents(scene, learned)
+        intents = trial_intents(scene, learned, inference=inference)
         with ArmSimulation(scene) as sim:
             for offset, spec in enumerate(protocol.after_learning()):
                 rng = np.random.default_rng([seed, index, 1000 + offset])
-                result = _run(scene, spec, simulation, params, rng, pid, sim, intents=intents)
+                result = _run(
+                    scene, spec, simulation, params, rng, pid, sim, inference, intents=intents
+                )
                 result.write(out_dir / spec.stem)
                 written.append(out_dir / spec.stem)
     surveys = simulated_surveys(
@@ -271,7 +283,11 @@ EXPERT = ParticipantParams(
 
 
 def run_case_study(
-    scene: Scene, case_study: dict, *, work_dir: Path
+    scene: Scene,
+    case_study: dict,
+    *,
+    work_dir: Path,
+    inference: Preset | str = DEFAULT_PRESET,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The expert case study (paper, Sec. IV) and the arbitration comparison.
 
@@ -300,11 +316,16 @@ def run_case_study(
         "demonstrations": DEMONSTRATIONS,
         "demonstrations_when": "always",
         "epsilon": case_study["epsilon"],
-        **assistant_options(case_study),
     }
     before = work_dir / "logs" / "before"
     simulate_before_learning(
-        0, scene, simulation=settings, out_dir=before, params=EXPERT, pid="expert"
+        0,
+        scene,
+        simulation=settings,
+        out_dir=before,
+        params=EXPERT,
+        pid="expert",
+        inference=inference,
     )
     learned = []
     for task in UNKNOWN_TASKS:
@@ -327,6 +348,7 @@ def run_case_study(
         out_dir=after,
         params=EXPERT,
         pid="expert",
+        inference=inference,
     )
     (after / SURVEYS_NAME).unlink()  # the expert answers no survey
     steps = build_tables(work_dir / "logs", scene, dataset="case_study").steps
@@ -334,6 +356,10 @@ def run_case_study(
     columns = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
     steps = steps[columns].reset_index(drop=True)
 
+    inference = as_preset(inference)
     trajectory = GoalIntent("red", scene.goals["red"]).optimal_trajectory(scene.start_state, 15.0)
-    arbitration = compare_arbitrations(Assistant(known_goal_intents(scene)), trajectory)
+    intents = known_goal_intents(scene, **inference.goal_options())
+    arbitration = compare_arbitrations(
+        Assistant(intents, **inference.assistant_options()), trajectory
+    )
     return steps, arbitration

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from casa_core.defaults import DEMONSTRATIONS, EPSILON
 from casa_core.io import SCHEMA, check_meta, read_trial
+from casa_core.presets import DEFAULT_PRESET, Preset
 from casa_core.robot.sim import ArmSimulation
 from casa_core.robot.teleop import KeyboardKeys, Window
 from casa_core.scene import Scene
@@ -39,6 +40,7 @@ def run_teleop(
     intents=None,
     repeat: int = 0,
     title: str | None = None,
+    inference: Preset | str = DEFAULT_PRESET,
     assistant_options: dict | None = None,
 ) -> Path:
     """Run one teleoperated trial and write its log; return the log's stem.
@@ -71,9 +73,10 @@ def run_teleop(
         Which demonstration this is (0-based), for the log's name.
     title : str, optional
         Shown in the window before the countdown; default task and method.
+    inference : Preset or str, default "casa"
+        The inference preset (:mod:`casa_core.presets`).
     assistant_options : dict, optional
-        Extra keyword arguments of :class:`~casa_core.assistant.Assistant` (e.g.
-        ``evidence``).
+        Extra keyword arguments of :class:`~casa_core.assistant.Assistant`.
 
     Raises
     ------
@@ -112,6 +115,7 @@ def run_teleop(
             source_kind=source_kind,
             max_duration=max_duration,
             sim=sim,
+            inference=inference,
             assistant_options=assistant_options,
             on_tick=window.on_tick,
         )
@@ -148,7 +152,7 @@ def teleop_session(
         Makes the key source of each trial; default the window's keyboard.
     **options
         Passed to :func:`run_teleop` for every trial (``phase``, ``gui``,
-        ``countdown``, ``realtime``, ``max_duration``, ``intents``,
+        ``countdown``, ``realtime``, ``max_duration``, ``intents``, ``inference``,
         ``assistant_options``).
 
     Returns

@@ -1,0 +1,397 @@
+"""The original implementation's session files, read and converted to casa-trial/1 trials.
+
+The authors' original implementation (Python 2, on the real JACO) wrote one NumPy
+``.npz`` per trial. :func:`read_session` loads one and checks every array it uses;
+:func:`convert_session` turns it into a casa-trial/1 metadata dict and time series.
+:mod:`casa_core.original_import` does this for a folder of them (``casa import
+original``). The format and the rules are ``docs/data-contracts.md`` ("Importing the
+original implementation's sessions"); in short:
+
+* **Ticks.** The original logged its control loop at about 18 Hz, irregularly
+  (``cmdpos_time``); casa-trial/1 has one row per 0.05 s tick. Rows are written at
+  ``t = 0, 0.05, ...`` up to the last sample. Joint angles (``curr_pos``, unwrapped over
+  the trial: a jump of more than pi between two samples is a wrap, not motion) are
+  interpolated linearly; keys, ``alpha``, betas and beliefs hold the value of the last
+  sample (or inference step) at or before the tick.
+* **Positions.** ``q1..q7`` are the joint angles; ``x, y, z`` the tool point and ``rot``
+  the turn of the tool about its axis (:func:`~casa_core.robot.kinematics.rot_of`,
+  unwrapped), both through our kinematics of the same JACO (joint angles mean the same).
+* **Keys.** The user's command ``joy_cmd`` is a joint velocity. Its tool velocity
+  ``J(q)[:3] @ joy_cmd`` gives ``x+``/``x-`` (and ``y``, ``z``) on each axis where it
+  exceeds :data:`KEY_FRACTION` of the key speed 0.05 m/s; a joint-7 velocity beyond the
+  same fraction of 0.5 rad/s gives ``rot-`` (positive) or ``rot+`` (negative: our rotate
+  key turns joint 7 backwards, see :mod:`casa_core.robot.sim`). Joint 7 moves neither the
+  tool point nor link 7, so the two parts do not mix. An all-zero command is no key.
+* **Inference.** Each step (``inf_start_time``) gives the betas (``beta_hist``) and
+  beliefs (``belief_hist``) of the goals, held until the next step; before the first
+  step beta is 0, the belief uniform and alpha 1. A negative beta (the original did not
+  clamp) is written as 0; a belief row that is not a distribution (the original's 0/0)
+  carries the last good row; both are counted in the trial's ``notes``. alpha: CASA
+  ``clip(1 / beta of the most likely goal, 0, 1)`` (a negative beta gives 0, as the
+  original applied it); PBA ``clip(d / 0.55, 0, 1)`` with ``d`` the distance of link 7
+  (the original's end effector) at the step to the most likely goal's link-7 position;
+  NA 1.
+"""
+
+from __future__ import annotations
+
+import zipfile
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from casa_core.defaults import PBA_DISTANCE, ROT_SPEED, SPEED
+from casa_core.io import JOINTS, Problem
+from casa_core.io.contract import TICK
+from casa_core.robot import kinematics as kin
+from casa_core.vocabulary import KEYS
+
+#: The original's reference joint angles (degrees): start, its goals 0 and 1, the unknown goal.
+REFERENCE_ANGLES = {
+    "start": (180, 175, 180, 300, 180, 180, 190),
+    "goal 0": (150, 130, 160, 240, 180, 172, 280),
+    "goal 1": (210, 130, 200, 240, 180, 172, 280),
+    "unknown goal": (123, 155, 131, 284, 180, 176, 189),
+}
+#: Our names of the original's goals, in its goal order (the scene's known goals).
+GOAL_NAMES = ("green", "purple")
+#: Our name of the unknown goal of the original's layout.
+UNKNOWN_GOAL_NAME = "red"
+#: A command faster than this fraction of a key's speed counts as the key held.
+KEY_FRACTION = 0.5
+#: The arrays a session must have (the others are not read).
+REQUIRED_KEYS = ("cmdpos_time", "curr_pos", "joy_cmd", "inf_start_time", "belief_hist")
+
+
+class SessionError(ValueError):
+    """A session file that cannot be converted; ``problems`` names the file and the key."""
+
+    def __init__(self, problems: list[Problem]):
+        self.problems = problems
+        super().__init__("\n".join(map(str, problems)))
+
+
+@dataclass(frozen=True)
+class Session:
+    """The arrays of one session file that the conversion reads, checked.
+
+    ``time`` (n,), ``q`` and ``command`` (n, 7); ``steps`` (m,) and ``belief`` (m, g);
+    ``beta`` (m, g) or None when the method logged none; ``started`` the wall clock or None.
+    """
+
+    file: str
+    time: np.ndarray
+    q: np.ndarray
+    command: np.ndarray
+    steps: np.ndarray
+    belief: np.ndarray
+    beta: np.ndarray | None
+    started: float | None
+
+    @property
+    def goals(self) -> int:
+        """Number of goals the original inferred over."""
+        return self.belief.shape[1]
+
+
+def reference_q(name: str) -> np.ndarray:
+    """The original's reference joint angles ``name`` (:data:`REFERENCE_ANGLES`), radians.
+
+    Examples
+    --------
+    >>> kin.link7_position(reference_q("goal 0")).round(3)
+    array([-0.548, -0.444,  0.424])
+    """
+    return np.radians(np.asarray(REFERENCE_ANGLES[name], dtype=float))
+
+
+def _load(path: Path) -> dict:
+    """The arrays of an ``.npz``; SessionError (rule ``npz``) when it cannot be read."""
+    try:
+        with np.load(path, allow_pickle=True, encoding="latin1") as archive:
+            return {key: archive[key] for key in archive.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as error:
+        message = f"not a readable NumPy .npz archive (a zip of arrays): {error}"
+        raise SessionError([Problem(str(path), "", "npz", message)]) from None
+
+
+class _Checker:
+    """Checks of one session's arrays; every problem names the file, the key and the rule."""
+
+    def __init__(self, file: str, arrays: dict):
+        self.file, self.arrays, self.problems = file, arrays, []
+
+    def fail(self, key: str, rule: str, message: str) -> None:
+        self.problems.append(Problem(self.file, f"key {key!r}", rule, message))
+
+    def array(self, key: str, columns: int | None):
+        """``key`` as a float array of shape (rows,), (rows, columns) or, for columns 0,
+        (rows, any); else None."""
+        if key not in self.arrays:
+            self.fail(key, "required-key", "missing")
+            return None
+        try:
+            value = np.asarray(self.arrays[key], dtype=float)
+        except (TypeError, ValueError):
+            self.fail(key, "numbers", f"must hold numbers, got dtype {self.arrays[key].dtype}")
+            return None
+        wanted = {None: "(n,)", 0: "(m, goals)"}.get(columns, f"(n, {columns})")
+        if value.ndim != (1 if columns is None else 2) or (columns and value.shape[1] != columns):
+            self.fail(key, "shape", f"must have shape {wanted}, got {value.shape}")
+            return None
+        if not np.all(np.isfinite(value)):
+            rows = np.flatnonzero(~np.isfinite(value).reshape(len(value), -1).all(axis=1))
+            self.fail(key, "finite-number", f"row {rows[0]} is not finite")
+            return None
+        return value
+
+    def rows(self, key: str, value, expected: int, of: str) -> None:
+        if value is not None and len(value) != expected:
+            self.fail(key, "rows", f"has {len(value)} rows, {of} has {expected}")
+
+    def increasing(self, key: str, value) -> None:
+        if value is None:
+            return
+        if len(value) and value[0] < 0:
+            self.fail(key, "range", f"starts at {value[0]!r} s: times count from the start, >= 0")
+        steps = np.diff(value)
+        if np.any(steps <= 0):
+            row = int(np.flatnonzero(steps <= 0)[0]) + 1
+            self.fail(
+                key,
+                "increasing",
+                f"must strictly increase; row {row} is not after row "
+                f"{row - 1} ({value[row]!r} <= {value[row - 1]!r})",
+            )
+
+
+def read_session(path: Path | str) -> Session:
+    """Load and check one session file of the original implementation.
+
+    Raises
+    ------
+    SessionError
+        Listing every problem, each naming the file, the key and the rule: ``npz`` (not
+        a readable archive), ``required-key``, ``numbers``, ``shape``, ``finite-number``,
+        ``rows`` (arrays of one length disagree), ``range``, ``increasing`` (times).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "task1a_data.npz"
+    >>> np.savez(path, cmdpos_time=[0.0, 0.05], curr_pos=np.zeros((2, 7)))
+    >>> try:
+    ...     read_session(path)
+    ... except SessionError as error:
+    ...     print([(p.where, p.rule) for p in error.problems])
+    [("key 'joy_cmd'", 'required-key'), ("key 'inf_start_time'", 'required-key'), \
+("key 'belief_hist'", 'required-key')]
+    """
+    path = Path(path)
+    check = _Checker(str(path), _load(path))
+    time = check.array("cmdpos_time", None)
+    q = check.array("curr_pos", kin.N_JOINTS)
+    command = check.array("joy_cmd", kin.N_JOINTS)
+    check.increasing("cmdpos_time", time)
+    if time is not None:
+        if not len(time):
+            check.fail("cmdpos_time", "non-empty", "no samples")
+        check.rows("curr_pos", q, len(time), "cmdpos_time")
+        check.rows("joy_cmd", command, len(time), "cmdpos_time")
+    steps = check.array("inf_start_time", None)
+    check.increasing("inf_start_time", steps)
+    belief, beta = _inference_arrays(check, steps)
+    started = check.arrays.get("start_T")
+    try:
+        started = float(started) if started is not None and np.ndim(started) == 0 else None
+    except (TypeError, ValueError):
+        started = None
+    if check.problems:
+        raise SessionError(check.problems)
+    return Session(str(path), time, q, command, steps, belief, beta, started)
+
+
+def _inference_arrays(check: _Checker, steps):
+    """``belief_hist`` (m, g) and ``beta_hist`` (m, g) or None; (0,) arrays when m = 0."""
+    m = None if steps is None else len(steps)
+    arrays = {}
+    for key in ("belief_hist", "beta_hist"):
+        raw = check.arrays.get(key)
+        if raw is None and key == "belief_hist":
+            check.fail(key, "required-key", "missing")
+            continue
+        if raw is None or np.shape(raw) == (0,):
+            # No betas: the method used none; no beliefs only without inference steps.
+            if key == "belief_hist" and m:
+                check.fail(key, "shape", f"is empty but inf_start_time has {m} steps")
+            arrays[key] = None
+            continue
+        value = check.array(key, 0)
+        if value is not None and m is not None:
+            check.rows(key, value, m, "inf_start_time")
+        arrays[key] = value
+    belief, beta = arrays.get("belief_hist"), arrays.get("beta_hist")
+    if belief is None:
+        belief = np.zeros((0, len(GOAL_NAMES)))
+    if beta is not None and beta.shape[1] != belief.shape[1]:
+        check.fail(
+            "beta_hist", "shape", f"has {beta.shape[1]} goals, belief_hist {belief.shape[1]}"
+        )
+    return belief, beta
+
+
+# --------------------------------------------------------------------------- conversion
+
+
+def _carry(rows: np.ndarray, good: np.ndarray, initial: np.ndarray) -> np.ndarray:
+    """Each bad row replaced by the last good row before it (``initial`` before any)."""
+    out = rows.copy()
+    last = initial
+    for i in range(len(rows)):
+        if good[i]:
+            last = rows[i]
+        else:
+            out[i] = last
+    return out
+
+
+def command_keys(q: np.ndarray, command: np.ndarray) -> str:
+    """The keys (space-separated, in :data:`~casa_core.vocabulary.KEYS` order) of one command.
+
+    Examples
+    --------
+    >>> q = reference_q("start")
+    >>> up = np.linalg.pinv(kin.jacobian(q)[:3]) @ np.array([0.0, 0.0, SPEED])
+    >>> command_keys(q, up), command_keys(q, -up + [0, 0, 0, 0, 0, 0, 0.5])
+    ('z+', 'z- rot-')
+    """
+    if not np.any(command):
+        return ""
+    velocity = kin.jacobian(q)[:3] @ command
+    held = set()
+    for axis, v in zip("xyz", velocity, strict=True):
+        if abs(v) > KEY_FRACTION * SPEED:
+            held.add(f"{axis}{'+' if v > 0 else '-'}")
+    if abs(command[6]) > KEY_FRACTION * ROT_SPEED:
+        held.add("rot-" if command[6] > 0 else "rot+")
+    return " ".join(key for key in KEYS if key in held)
+
+
+@dataclass(frozen=True)
+class Converted:
+    """One converted trial: its ``frame`` (casa-trial/1 columns) and what was changed."""
+
+    frame: pd.DataFrame
+    negative_betas: int
+    bad_beliefs: int
+    samples: int
+
+
+def _held(times: np.ndarray, ticks: np.ndarray) -> np.ndarray:
+    """Index of the last of ``times`` at or before each tick; -1 before the first."""
+    return np.searchsorted(times, ticks + 1e-9, side="right") - 1
+
+
+def convert_session(session: Session, method: str, goal_names) -> Converted:
+    """The casa-trial/1 time series of a session (module docs give the rules).
+
+    Parameters
+    ----------
+    session : Session
+    method : {"NA", "PBA", "CASA"}
+        How alpha is recomputed from the logged inference.
+    goal_names : sequence of str
+        Our names of the session's goals, in its order (``belief_hist``'s columns).
+
+    Raises
+    ------
+    SessionError
+        A CASA session without betas, or a PBA session predicting a goal without a
+        known position.
+
+    Examples
+    --------
+    >>> n = 3
+    >>> session = Session("task1a_data.npz", np.array([0.0, 0.06, 0.11]),
+    ...                   np.tile(reference_q("start"), (n, 1)), np.zeros((n, 7)),
+    ...                   np.array([0.05]), np.array([[0.25, 0.75]]), None, None)
+    >>> converted = convert_session(session, "NA", ["green", "purple"])
+    >>> converted.frame[["t", "keys", "alpha", "belief:purple"]].values.tolist()
+    [[0.0, '', 1.0, 0.5], [0.05, '', 1.0, 0.75], [0.1, '', 1.0, 0.75]]
+    """
+    goals = len(goal_names)
+    if goals != session.goals:
+        raise ValueError(f"{goals} goal names for {session.goals} goals")
+    last = session.time[-1]
+    ticks = np.round(np.arange(int(np.floor(last / TICK + 1e-9)) + 1) * TICK, 6)
+    unwrapped = np.unwrap(session.q, axis=0)
+    q = np.column_stack([np.interp(ticks, session.time, unwrapped[:, j]) for j in range(7)])
+    frames = [kin.forward_kinematics(row) for row in q]
+    position = np.array([frame[:3, 3] for frame in frames])
+    rot = np.unwrap([kin.rot_of(frame[:3, :3]) for frame in frames])
+    sample_keys = [command_keys(qi, ci) for qi, ci in zip(session.q, session.command, strict=True)]
+    at_sample = _held(session.time, ticks)
+    keys = ["" if i < 0 else sample_keys[i] for i in at_sample]
+    table = {"t": ticks, "x": position[:, 0], "y": position[:, 1], "z": position[:, 2]}
+    table |= {"rot": rot, "keys": keys}
+    table |= {name: q[:, j] for j, name in enumerate(JOINTS)}
+
+    uniform = np.full(goals, 1.0 / goals) if goals else np.zeros(0)
+    belief = session.belief
+    total = belief.sum(axis=1) if len(belief) else np.zeros(0)
+    good = np.isfinite(belief).all(axis=1) & (belief >= 0).all(axis=1) & (total > 0)
+    belief = _carry(belief / np.where(good, total, 1.0)[:, None], good, uniform)
+    beta = session.beta
+    negative = 0 if beta is None else int(np.sum(beta < 0))
+    alphas = _step_alphas(session, method, belief, goal_names)
+    at_step = _held(session.steps, ticks)
+    before = at_step < 0
+    index = np.maximum(at_step, 0)
+    table["alpha"] = np.where(before, 1.0, alphas[index]) if len(alphas) else np.ones(len(ticks))
+    for g, name in enumerate(goal_names if len(belief) else ()):
+        if beta is not None:
+            table[f"beta:{name}"] = np.where(before, 0.0, np.maximum(beta[index, g], 0.0))
+        table[f"belief:{name}"] = np.where(before, uniform[g], belief[index, g])
+    return Converted(pd.DataFrame(table), negative, int(np.sum(~good)), len(session.time))
+
+
+def _step_alphas(session: Session, method: str, belief: np.ndarray, goal_names) -> np.ndarray:
+    """alpha after each inference step, as the original arbitrated it."""
+    steps = len(session.steps)
+    if method == "NA" or not steps:
+        return np.ones(steps)
+    likely = np.argmax(belief, axis=1)
+    if method == "CASA":
+        if session.beta is None:
+            message = "is empty, but a CASA trial's alpha needs the confidence of every step"
+            raise SessionError([Problem(session.file, "key 'beta_hist'", "shape", message)])
+        with np.errstate(divide="ignore"):
+            inverse = 1.0 / session.beta[np.arange(steps), likely]
+        return np.clip(inverse, 0.0, 1.0)
+    known = [name for name in goal_names if name in GOAL_NAMES]
+    if np.any(likely >= len(known)):
+        message = f"PBA predicts a goal without a known position; known: {', '.join(known)}"
+        raise SessionError([Problem(session.file, "key 'belief_hist'", "goal", message)])
+    targets = np.array([kin.link7_position(reference_q(f"goal {g}")) for g in likely])
+    unwrapped = np.unwrap(session.q, axis=0)
+    q = np.column_stack([np.interp(session.steps, session.time, unwrapped[:, j]) for j in range(7)])
+    distance = np.linalg.norm([kin.link7_position(row) for row in q] - targets, axis=1)
+    return np.clip(distance / PBA_DISTANCE, 0.0, 1.0)
+
+
+def started_at(session: Session) -> str | None:
+    """The session's wall-clock start (``start_T``) as ISO 8601 UTC, or None.
+
+    Examples
+    --------
+    >>> session = Session("f", np.zeros(1), np.zeros((1, 7)), np.zeros((1, 7)), np.zeros(0),
+    ...                   np.zeros((0, 2)), None, 1.6e9)
+    >>> started_at(session)
+    '2020-09-13T12:26:40+00:00'
+    """
+    if session.started is None or not np.isfinite(session.started) or session.started <= 0:
+        return None
+    return datetime.fromtimestamp(session.started, UTC).isoformat()
