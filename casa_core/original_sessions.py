@@ -26,7 +26,8 @@ original implementation's sessions"); in short:
   beliefs (``belief_hist``) of the goals, held until the next step; before the first
   step beta is 0, the belief uniform and alpha 1. A negative beta (the original did not
   clamp) is written as 0; a belief row that is not a distribution (the original's 0/0)
-  carries the last good row; both are counted in the trial's ``notes``. alpha: CASA
+  carries the last good row, as does a beta row that is not finite; all are counted in
+  the trial's ``notes``. alpha: CASA
   ``clip(1 / beta of the most likely goal, 0, 1)`` (a negative beta gives 0, as the
   original applied it); PBA ``clip(d / 0.55, 0, 1)`` with ``d`` the distance of link 7
   (the original's end effector) at the step to the most likely goal's link-7 position;
@@ -67,7 +68,7 @@ REQUIRED_KEYS = ("cmdpos_time", "curr_pos", "joy_cmd", "inf_start_time", "belief
 
 
 class SessionError(ValueError):
-    """A session file that cannot be converted; ``problems`` names the file and the key."""
+    """Session files that cannot be imported; ``problems`` lists each, naming the file."""
 
     def __init__(self, problems: list[Problem]):
         self.problems = problems
@@ -90,11 +91,6 @@ class Session:
     belief: np.ndarray
     beta: np.ndarray | None
     started: float | None
-
-    @property
-    def goals(self) -> int:
-        """Number of goals the original inferred over."""
-        return self.belief.shape[1]
 
 
 def reference_q(name: str) -> np.ndarray:
@@ -127,9 +123,9 @@ class _Checker:
     def fail(self, key: str, rule: str, message: str) -> None:
         self.problems.append(Problem(self.file, f"key {key!r}", rule, message))
 
-    def array(self, key: str, columns: int | None):
+    def array(self, key: str, columns: int | None, *, finite: bool = True):
         """``key`` as a float array of shape (rows,), (rows, columns) or, for columns 0,
-        (rows, any); else None."""
+        (rows, any); else None. ``finite=False``: NaN and inf allowed (the original's 0/0)."""
         if key not in self.arrays:
             self.fail(key, "required-key", "missing")
             return None
@@ -142,7 +138,7 @@ class _Checker:
         if value.ndim != (1 if columns is None else 2) or (columns and value.shape[1] != columns):
             self.fail(key, "shape", f"must have shape {wanted}, got {value.shape}")
             return None
-        if not np.all(np.isfinite(value)):
+        if finite and not np.all(np.isfinite(value)):
             rows = np.flatnonzero(~np.isfinite(value).reshape(len(value), -1).all(axis=1))
             self.fail(key, "finite-number", f"row {rows[0]} is not finite")
             return None
@@ -205,10 +201,8 @@ def read_session(path: Path | str) -> Session:
     check.increasing("inf_start_time", steps)
     belief, beta = _inference_arrays(check, steps)
     started = check.arrays.get("start_T")
-    try:
-        started = float(started) if started is not None and np.ndim(started) == 0 else None
-    except (TypeError, ValueError):
-        started = None
+    number = np.ndim(started) == 0 and np.asarray(started).dtype.kind in "iuf"
+    started = float(started) if number else None
     if check.problems:
         raise SessionError(check.problems)
     return Session(str(path), time, q, command, steps, belief, beta, started)
@@ -229,7 +223,7 @@ def _inference_arrays(check: _Checker, steps):
                 check.fail(key, "shape", f"is empty but inf_start_time has {m} steps")
             arrays[key] = None
             continue
-        value = check.array(key, 0)
+        value = check.array(key, 0, finite=False)
         if value is not None and m is not None:
             check.rows(key, value, m, "inf_start_time")
         arrays[key] = value
@@ -282,11 +276,13 @@ def command_keys(q: np.ndarray, command: np.ndarray) -> str:
 
 @dataclass(frozen=True)
 class Converted:
-    """One converted trial: its ``frame`` (casa-trial/1 columns) and what was changed."""
+    """One converted trial: its ``frame`` (casa-trial/1 columns) and what was changed
+    (counts of negative betas, belief rows and non-finite beta rows carried forward)."""
 
     frame: pd.DataFrame
     negative_betas: int
     bad_beliefs: int
+    bad_betas: int
     samples: int
 
 
@@ -323,8 +319,8 @@ def convert_session(session: Session, method: str, goal_names) -> Converted:
     [[0.0, '', 1.0, 0.5], [0.05, '', 1.0, 0.75], [0.1, '', 1.0, 0.75]]
     """
     goals = len(goal_names)
-    if goals != session.goals:
-        raise ValueError(f"{goals} goal names for {session.goals} goals")
+    if goals != session.belief.shape[1]:
+        raise ValueError(f"{goals} goal names for {session.belief.shape[1]} goals")
     last = session.time[-1]
     ticks = np.round(np.arange(int(np.floor(last / TICK + 1e-9)) + 1) * TICK, 6)
     unwrapped = np.unwrap(session.q, axis=0)
@@ -344,9 +340,12 @@ def convert_session(session: Session, method: str, goal_names) -> Converted:
     total = belief.sum(axis=1) if len(belief) else np.zeros(0)
     good = np.isfinite(belief).all(axis=1) & (belief >= 0).all(axis=1) & (total > 0)
     belief = _carry(belief / np.where(good, total, 1.0)[:, None], good, uniform)
-    beta = session.beta
+    beta, bad_betas = session.beta, 0
+    if beta is not None:
+        finite = np.isfinite(beta).all(axis=1)
+        beta, bad_betas = _carry(beta, finite, np.zeros(goals)), int(np.sum(~finite))
     negative = 0 if beta is None else int(np.sum(beta < 0))
-    alphas = _step_alphas(session, method, belief, goal_names)
+    alphas = _step_alphas(session, method, belief, beta, goal_names)
     at_step = _held(session.steps, ticks)
     before = at_step < 0
     index = np.maximum(at_step, 0)
@@ -355,21 +354,22 @@ def convert_session(session: Session, method: str, goal_names) -> Converted:
         if beta is not None:
             table[f"beta:{name}"] = np.where(before, 0.0, np.maximum(beta[index, g], 0.0))
         table[f"belief:{name}"] = np.where(before, uniform[g], belief[index, g])
-    return Converted(pd.DataFrame(table), negative, int(np.sum(~good)), len(session.time))
+    bad = int(np.sum(~good))
+    return Converted(pd.DataFrame(table), negative, bad, bad_betas, len(session.time))
 
 
-def _step_alphas(session: Session, method: str, belief: np.ndarray, goal_names) -> np.ndarray:
+def _step_alphas(session: Session, method: str, belief, beta, goal_names) -> np.ndarray:
     """alpha after each inference step, as the original arbitrated it."""
     steps = len(session.steps)
     if method == "NA" or not steps:
         return np.ones(steps)
     likely = np.argmax(belief, axis=1)
     if method == "CASA":
-        if session.beta is None:
+        if beta is None:
             message = "is empty, but a CASA trial's alpha needs the confidence of every step"
             raise SessionError([Problem(session.file, "key 'beta_hist'", "shape", message)])
         with np.errstate(divide="ignore"):
-            inverse = 1.0 / session.beta[np.arange(steps), likely]
+            inverse = 1.0 / beta[np.arange(steps), likely]
         return np.clip(inverse, 0.0, 1.0)
     known = [name for name in goal_names if name in GOAL_NAMES]
     if np.any(likely >= len(known)):

@@ -86,6 +86,8 @@ TASK_CONDITIONS = {
 }
 
 
+#: The name of the intent learned in each unknown task.
+LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
 #: The inference presets (casa_core.presets): this project's, the original
 #: implementation's, the paper's as written.
 PRESET_NAMES = ("casa", "original", "paper")

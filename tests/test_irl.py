@@ -179,11 +179,11 @@ def test_features_are_documented_and_computed():
 def test_learned_cost_is_calibrated_against_a_goal_intent(learned):
     # IRLConfig.calibration = "path_length": the optimal trajectory from the start
     # costs what a path-length goal intent at its end charges, the closed form
-    # 227 per metre * distance (the goal is reachable within T = 15 s at 0.05 m/s).
+    # 50 / 0.22 per metre * distance (the straight line, whatever the time left).
     demos, intent, history = learned
     start = np.mean([d[0, 1:5] for d in demos], axis=0)
     end = intent.optimal_trajectory(start, 15.0)[-1, :3]
-    expected = 227.0 * np.linalg.norm(end - start[:3])
+    expected = 50 / 0.22 * np.linalg.norm(end - start[:3])
     # 1e-3: the plan is redone under the scaled cost, and the float32 network's
     # gradients round differently at another scale (observed 2e-4).
     assert intent.cost_to_go(start, 15.0) == pytest.approx(expected, rel=1e-3)

@@ -519,3 +519,27 @@ def test_a_fifo_named_like_a_log_is_not_opened(tmp_path):
     _trial(tmp_path)
     os.mkfifo(tmp_path / "surveys.csv")  # opening it for reading would block forever
     assert _found(tmp_path) == {("surveys.csv", "", "readable", "error")}
+
+
+@pytest.mark.parametrize(
+    ("inference", "message"),
+    [
+        ({"preset": "orignal", "evidence": "commanded"}, "preset is 'orignal', expected one of"),
+        ({"preset": "casa", "evidence": "robot"}, "evidence is 'robot', expected one of"),
+        ({"preset": "casa"}, "expected an object with the keys preset, evidence"),
+        ("casa", "expected an object with the keys preset, evidence"),
+    ],
+)
+def test_the_inference_settings_of_a_trial_are_checked(inference, message):
+    meta = {
+        "schema": "casa-trial/1",
+        "participant": "p01",
+        "task": "known_goal",
+        "method": "CASA",
+        "phase": "no_misspecification",
+        "source": "human",
+    }
+    assert check_meta({**meta, "inference": {"preset": "paper", "evidence": "executed"}}, "t") == []
+    [problem] = check_meta({**meta, "inference": inference}, "t.json")
+    assert (problem.where, problem.rule) == ("key 'inference'", "inference-settings")
+    assert message in problem.message

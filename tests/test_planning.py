@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import torch
 
+from casa_core.defaults import COST_PER_METRE
 from casa_core.intents import GoalIntent
 from casa_core.planning import (
     PlannedIntent,
@@ -46,7 +47,7 @@ def per_axis_optimum(start, goal, n):
 class GoalCost(PlannedIntent):
     """A PlannedIntent with GoalIntent's distance_sum cost (scale * dt * distance)."""
 
-    def __init__(self, goal, planner=None, scale=227.0):
+    def __init__(self, goal, planner=None, scale=COST_PER_METRE):
         super().__init__("goal", planner)
         self.goal = torch.as_tensor(goal, dtype=torch.float64)
         self.scale = scale

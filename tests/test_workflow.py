@@ -206,15 +206,15 @@ def test_config_overrides_reach_the_package_commands(repo):
     import yaml
 
     effective = repo / "data" / "interim" / "config.yaml"
-    result = snakemake(repo, "--dry-run", "--config", "simulation={evidence: executed}")
+    result = snakemake(repo, "--dry-run", "--config", "simulation={max_duration: 20.0}")
     assert result.returncode == 0, result.stdout + result.stderr
     seen = yaml.safe_load(effective.read_text(encoding="utf-8"))
-    assert seen["simulation"]["evidence"] == "executed"
+    assert seen["simulation"]["max_duration"] == 20.0
     assert seen["simulation"]["participants"] == 11  # the rest of the file is kept
     config_file = "config/config.yaml"
     assert (repo / config_file).read_text() == (ROOT / config_file).read_text()  # never edited
     assert snakemake(repo, "--dry-run").returncode == 0
-    assert yaml.safe_load(effective.read_text())["simulation"]["evidence"] == "commanded"
+    assert yaml.safe_load(effective.read_text())["simulation"]["max_duration"] == 40.0
     assert effective.stat().st_mode & 0o777 == 0o644  # written by casa_core.io.atomic
     # An unchanged config is not rewritten, so that it reruns nothing.
     before = effective.stat().st_mtime_ns

@@ -27,8 +27,11 @@ import pandas as pd
 from casa_core.io.contract import CONDITION_KEYS, SINGLE_TRIAL_PHASES, SURVEYS_NAME
 from casa_core.io.trial_log import inside, load_surveys, load_trial, trial_files, trial_stem
 from casa_core.io.validation import Problem
+from casa_core.scene import SceneError, load_scene
 
 _LOG_SUFFIXES = (".csv", ".json")
+#: A dataset's own scene: this file at the dataset's top level (docs/data-contracts.md).
+SCENE_NAME = "scene.yaml"
 
 
 @dataclass
@@ -36,7 +39,8 @@ class FileCheck:
     """The outcome of checking one file of a dataset.
 
     ``kind`` is ``"trial"`` (the ``.csv`` of a trial, with its ``.json``),
-    ``"surveys"``, ``"other"`` (not a log: ignored), or, for a path given to
+    ``"surveys"``, ``"scene"`` (the dataset's ``scene.yaml``), ``"other"`` (not a log:
+    ignored), or, for a path given to
     :func:`check_paths`, ``"folder"`` (without logs) or ``"missing"``. ``meta`` and
     ``frame`` hold what was parsed (typed as :func:`~casa_core.io.read_trial` /
     :func:`~casa_core.io.read_surveys` return it), so that a checked dataset need not
@@ -212,11 +216,31 @@ def _surveys_without_trials(surveys: list[FileCheck], trials: list[FileCheck]) -
                 )
 
 
+def _check_scene(path: Path, root: Path) -> FileCheck:
+    """A dataset's ``scene.yaml``, validated as a scene; the problem names the key."""
+    if not inside(path, root):
+        message = f"resolves to {os.path.realpath(path)}, outside the dataset folder: not read"
+        return FileCheck(path, "scene", [Problem(str(path), "", "symlink", message)])
+    try:
+        load_scene(path)
+    except SceneError as error:
+        # The message starts with the file, then the dotted key.
+        text = str(error).removeprefix(f"{path}: ")
+        key, _, message = text.partition(": ")
+        where = f"key {key!r}" if message and " " not in key else ""
+        problem = Problem(str(path), where, "scene", message if where else text)
+        return FileCheck(path, "scene", [problem])
+    return FileCheck(path, "scene")
+
+
 def _classify(path: Path, root: Path | None) -> str | FileCheck:
-    """``"surveys"``, ``"trial"`` or a finished check (not a log, a misnamed one, a link out)."""
+    """``"surveys"``, ``"trial"`` or a finished check (not a log, a misnamed one, a link out,
+    a dataset's scene)."""
     name = str(path)
     if path.name == SURVEYS_NAME:
         return "surveys"
+    if path.name == SCENE_NAME and root is not None and path.parent == root:
+        return _check_scene(path, root)
     if path.name.lower() == SURVEYS_NAME:
         message = f"Likert answers are read only from files named exactly {SURVEYS_NAME!r}"
         return FileCheck(path, "other", [Problem(name, "", "surveys-name", message)])

@@ -1,9 +1,10 @@
 """The rules of casa-trial/1: every way a trial's metadata, its CSV or a surveys file can break it.
 
 Checks never stop at the first problem: each reports every :class:`Problem` it finds
-(file, where, rule, message) so that a user can fix a file in one pass. The rules work
-on text and parsed values only; :mod:`casa_core.io.trial_log` reads and writes the files.
-The contract itself is ``docs/data-contracts.md`` (data in :mod:`casa_core.io.contract`).
+(file, where, rule, message) so that a user can fix a file in one pass. The metadata's
+rules are in :mod:`casa_core.io.metadata`. The rules work on text and parsed values
+only; :mod:`casa_core.io.trial_log` reads and writes the files. The contract itself is
+``docs/data-contracts.md`` (data in :mod:`casa_core.io.contract`).
 
 Examples
 --------
@@ -14,10 +15,6 @@ Examples
 """
 
 from __future__ import annotations
-
-import math
-import unicodedata
-from collections.abc import Callable
 
 import pandas as pd
 
@@ -31,23 +28,15 @@ from casa_core.io.contract import (
     JOINTS,
     KEYS,
     LIKERT_SCORES,
-    META_ENUMS,
-    META_OPTIONAL,
-    META_REQUIRED,
-    METHODS,
-    PHASE_METHOD,
-    PHASES,
     SCHEMA,
     SURVEY_ANSWER_KEY,
     SURVEY_COLUMNS,
     SURVEY_ENUMS,
     SURVEY_OPTIONAL,
-    TASK_PHASES,
-    TASKS,
     TIME_RANGE,
 )
+from casa_core.io.metadata import check_meta, participant_id_problem
 from casa_core.io.problems import LogError, Problem
-from casa_core.vocabulary import EVIDENCE, PRESET_NAMES
 
 __all__ = [
     "LogError",
@@ -57,163 +46,6 @@ __all__ = [
     "parse_trial_csv",
     "participant_id_problem",
 ]
-
-# --------------------------------------------------------------------------- metadata
-
-#: A metadata rule's check: (value of its key, whole metadata) -> what is wrong, or None.
-MetaCheck = Callable[[object, dict], str | None]
-
-
-def _schema(value, meta: dict) -> str | None:
-    return None if value == SCHEMA else f"is {value!r}, expected {SCHEMA!r}"
-
-
-def _non_empty_string(value, meta: dict) -> str | None:
-    if isinstance(value, str) and value.strip():
-        return None
-    return f"is {value!r}, expected a non-empty string"
-
-
-def participant_id_problem(value: str) -> str | None:
-    """What makes a participant id unusable as a name (and later a path part), or None.
-
-    An id has no ``/`` or ``\\``, is not ``.`` or ``..``, has no control characters and
-    no leading or trailing white space.
-
-    Examples
-    --------
-    >>> participant_id_problem("p01") is None, participant_id_problem("../x")
-    (True, "is '../x', must not contain '/' or '\\\\'")
-    """
-    if "/" in value or "\\" in value:
-        return f"is {value!r}, must not contain '/' or '\\'"
-    if value in (".", ".."):
-        return f"is {value!r}, must not be '.' or '..'"
-    if any(unicodedata.category(c) == "Cc" for c in value):
-        return f"is {value!r}, must not contain control characters"
-    if value != value.strip():
-        return f"is {value!r}, must not start or end with white space"
-    return None
-
-
-def _participant_id(value, meta: dict) -> str | None:
-    return participant_id_problem(value) if isinstance(value, str) and value.strip() else None
-
-
-def _integer(value, meta: dict) -> str | None:
-    if isinstance(value, int) and not isinstance(value, bool):
-        return None
-    return f"is {value!r}, expected an integer"
-
-
-def _one_of(allowed: tuple[str, ...]) -> MetaCheck:
-    def check(value, meta: dict) -> str | None:
-        return None if value in allowed else f"is {value!r}, expected one of {', '.join(allowed)}"
-
-    return check
-
-
-def _task_phase(phase, meta: dict) -> str | None:
-    task = meta.get("task")
-    if task in TASKS and phase in PHASES and phase not in TASK_PHASES[task]:
-        expected = " or ".join(TASK_PHASES[task])
-        return f"{phase!r} is not a phase of task {task!r} ({expected})"
-    return None
-
-
-def _phase_method(method, meta: dict) -> str | None:
-    phase = meta.get("phase")
-    expected = PHASE_METHOD.get(phase) if isinstance(phase, str) else None
-    if expected is not None and method in METHODS and method != expected:
-        return f"phase {phase!r} is run with {expected!r}"
-    return None
-
-
-def _intent_names(intents, meta: dict) -> str | None:
-    if not (isinstance(intents, list) and all(isinstance(n, str) and n.strip() for n in intents)):
-        return "expected a list of non-empty strings"
-    if len(set(intents)) != len(intents):
-        return "an intent name is listed twice"
-    return None
-
-
-def _positive_number(value, meta: dict) -> str | None:
-    number = isinstance(value, int | float) and not isinstance(value, bool)
-    if number and math.isfinite(value) and value > 0:
-        return None
-    return f"is {value!r}, expected a positive number of seconds"
-
-
-def _inference(value, meta: dict) -> str | None:
-    allowed = {"preset": PRESET_NAMES, "evidence": EVIDENCE}
-    if not isinstance(value, dict) or set(value) != set(allowed):
-        return 'expected {"preset": ..., "evidence": ...}'
-    for key, names in allowed.items():
-        if value[key] not in names:
-            return f"{key} is {value[key]!r}, expected one of {', '.join(names)}"
-    return None
-
-
-#: The metadata rules after the required and unknown keys, in the order they are
-#: reported: (key, rule, check). A check runs when its key is present.
-META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
-    ("schema", "schema", _schema),
-    ("participant", "non-empty-string", _non_empty_string),
-    ("participant", "participant-id", _participant_id),
-    *((key, "enum", _one_of(allowed)) for key, allowed in META_ENUMS),
-    ("phase", "task-phase", _task_phase),
-    ("method", "phase-method", _phase_method),
-    ("intents", "intent-names", _intent_names),
-    ("max_duration", "positive-number", _positive_number),
-    ("seed", "integer", _integer),
-    ("inference", "inference-settings", _inference),
-)
-
-
-def check_meta(meta, file: str) -> list[Problem]:
-    """Every way in which a trial's metadata breaks casa-trial/1.
-
-    Parameters
-    ----------
-    meta : object
-        The parsed ``.json``; anything but a dict is one ``json-object`` problem.
-    file : str
-        The file's name, used in problems.
-
-    Returns
-    -------
-    list of Problem
-        Missing keys, unknown keys, then :data:`META_RULES` in order; empty when valid.
-
-    Examples
-    --------
-    >>> meta = {"schema": "casa-trial/1", "participant": "p01", "task": "unknown_goal",
-    ...         "method": "PBA", "phase": "demonstration", "source": "human"}
-    >>> [(p.where, p.rule) for p in check_meta(meta, "t.json")]
-    [("key 'method'", 'phase-method')]
-    >>> [p.rule for p in check_meta({"participant": "p01"}, "t.json")][:2]
-    ['required-key', 'required-key']
-    """
-    if not isinstance(meta, dict):
-        return [Problem(file, "", "json-object", "the metadata must be a JSON object")]
-    problems = []
-
-    def bad(key: str, rule: str, message: str) -> None:
-        problems.append(Problem(file, f"key {key!r}", rule, message))
-
-    for key in META_REQUIRED:
-        if key not in meta:
-            bad(key, "required-key", "missing")
-    allowed = ", ".join(META_REQUIRED + META_OPTIONAL)
-    for key in sorted(set(meta) - set(META_REQUIRED) - set(META_OPTIONAL)):
-        bad(key, "unknown-key", f"not part of {SCHEMA}; allowed keys: {allowed}")
-    for key, rule, check in META_RULES:
-        if key in meta:
-            message = check(meta[key], meta)
-            if message is not None:
-                bad(key, rule, message)
-    return problems
-
 
 # --------------------------------------------------------------------------- trial CSV
 

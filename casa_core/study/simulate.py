@@ -26,10 +26,8 @@ from casa_core.study import likert, protocol
 from casa_core.study.closed_loop import as_preset, known_goal_intents, run_trial, trial_intents
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
 from casa_core.tasks import intended_trajectory
-from casa_core.vocabulary import UNANALYSED_PHASES, UNKNOWN_TASKS
+from casa_core.vocabulary import LEARNED_NAMES, UNANALYSED_PHASES, UNKNOWN_TASKS
 
-#: Name of the intent learned for each unknown task (colours follow the goal's name).
-LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
 #: Stream numbers of default_rng([seed, index, stream]).
 PARAMS_STREAM, LIKERT_STREAM = 0, 9999
 

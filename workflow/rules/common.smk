@@ -95,6 +95,12 @@ def raw_files(wildcards):
     return files
 
 
+def dataset_scene(wildcards):
+    """A dataset's own scene.yaml (an imported dataset carries its layout), else config's."""
+    own = RAW / wildcards.ds / "scene.yaml"
+    return str(own) if own.is_file() else config["scene"]
+
+
 def has_surveys(ds):
     """Whether a dataset has Likert answers; generated datasets always do."""
     return ds in GENERATED or any((RAW / ds).rglob("surveys.csv"))

@@ -26,7 +26,7 @@ rule process:
     input:
         raw_files,
         validation=PROCESSED / "{ds}" / "validation.csv",
-        scene=config["scene"],
+        scene=dataset_scene,
     output:
         trials=PROCESSED / "{ds}" / "trials.csv",
         steps=PROCESSED / "{ds}" / "steps.csv",
