@@ -75,3 +75,33 @@ def test_simulate_names_a_missing_scene_file(tmp_path, capsys):
     )  # fmt: skip
     assert code == 2
     assert f"cannot read the scene {tmp_path / 'none.yaml'}" in capsys.readouterr().err
+
+
+def test_measured_training_times_go_to_their_own_timing_table(tmp_path):
+    # Without demonstrations nothing is learned (fast): the learning row has no time,
+    # the timing row holds it; learning-table gathers each kind into its own table.
+    from casa_core.cli import main
+
+    for pid, task in (("p02", "unknown_goal"), ("p01", "unknown_skill")):
+        row, timing = simulate.learn_from_demonstrations(
+            tmp_path, task, scene=SCENE, seed=1, library=tmp_path / "lib", pid=pid
+        )
+        assert "train_seconds" not in row and set(timing) == {
+            "participant",
+            "task",
+            "intent",
+            "train_seconds",
+        }
+        pd.DataFrame([row]).to_csv(tmp_path / f"{pid}_{task}.csv", index=False)
+        pd.DataFrame([timing]).to_csv(tmp_path / f"{pid}_{task}_timing.csv", index=False)
+    args = ["simulate", "learning-table", "--out", str(tmp_path / "learning.csv")]
+    learned = [p for p in sorted(tmp_path.glob("p0?_*.csv")) if not p.stem.endswith("_timing")]
+    args += ["--rows", *map(str, learned)]
+    args += ["--timing", str(tmp_path / "learning_timing.csv")]
+    args += ["--timing-rows", *map(str, sorted(tmp_path.glob("*_timing.csv")))]
+    assert main(args) == 0
+    learning = pd.read_csv(tmp_path / "learning.csv")
+    timing = pd.read_csv(tmp_path / "learning_timing.csv")
+    assert list(learning["participant"]) == ["p01", "p02"]  # sorted
+    assert "train_seconds" not in learning and "train_seconds" in timing
+    assert len(timing) == 2

@@ -70,6 +70,13 @@ def _add_simulate(commands) -> None:
         help="1-based participant number",
     )
     command.add_argument("--rows", nargs="*", default=[], help="learning-table: learn CSVs")
+    command.add_argument(
+        "--timing-rows", nargs="*", default=[], help="learning-table: learn timing CSVs"
+    )
+    command.add_argument(
+        "--timing",
+        help="learn: the CSV of its measured training time; learning-table: the timing table",
+    )
     command.add_argument("--out", required=True, help="folder (before/after) or CSV (learn)")
     command.add_argument("--before", help="the participant's before-learning folder")
     command.add_argument("--task", choices=vocabulary.UNKNOWN_TASKS, help="learn: task")
@@ -107,10 +114,12 @@ def _run_stage(args) -> int:
     if args.stage == "learning-table":
         from casa_core.datasets import read_table
 
-        rows = [read_table(path) for path in sorted(args.rows)]
-        table = pd.concat(rows, ignore_index=True).sort_values(["participant", "task"])
-        write_csv(args.out, table)
-        print(f"casa simulate learning-table: {len(table)} learned intent(s) -> {args.out}")
+        for paths, out in ((args.rows, args.out), (args.timing_rows, args.timing)):
+            if out:
+                rows = [read_table(path) for path in sorted(paths)]
+                table = pd.concat(rows, ignore_index=True).sort_values(["participant", "task"])
+                write_csv(out, table)
+                print(f"casa simulate learning-table: {len(table)} learned intent(s) -> {out}")
         return 0
     config, scene = _load_config(args)
     simulation = config["simulation"]
@@ -122,7 +131,7 @@ def _run_stage(args) -> int:
             index, scene, simulation=simulation, out_dir=Path(args.out), inference=inference
         )
     elif args.stage == "learn":
-        row = simulate.learn_from_demonstrations(
+        row, timing = simulate.learn_from_demonstrations(
             Path(args.before),
             args.task,
             scene=scene,
@@ -132,6 +141,9 @@ def _run_stage(args) -> int:
         )
         write_csv(args.out, pd.DataFrame([row]))
         written = [args.out]
+        if args.timing:
+            write_csv(args.timing, pd.DataFrame([timing]))
+            written.append(args.timing)
     else:
         learned = sorted(Path(args.library).rglob("*.intent.json"))
         written = simulate.simulate_after_learning(

@@ -35,6 +35,7 @@ rule learn_intent:
     output:
         library=directory(INTENTS / "p{p}" / "{task}"),
         row=PROCESSED / "simulated" / "learning" / "p{p}_{task}.csv",
+        timing=PROCESSED / "simulated" / "learning" / "p{p}_{task}_timing.csv",
     log:
         "logs/learn/p{p}_{task}.log",
     conda:
@@ -42,7 +43,7 @@ rule learn_intent:
     shell:
         "exec casa simulate learn --config {input.config} --participant {wildcards.p} "
         "--task {wildcards.task} --before {input.before} --library {output.library} "
-        "--out {output.row} > {log} 2>&1"
+        "--out {output.row} --timing {output.timing} > {log} 2>&1"
 
 
 rule simulate_after_learning:
@@ -65,19 +66,26 @@ rule simulate_after_learning:
 
 rule learning_table:
     input:
-        expand(
+        rows=expand(
             PROCESSED / "simulated" / "learning" / "p{p}_{task}.csv",
             p=PARTICIPANTS,
             task=UNKNOWN_TASKS,
         ),
+        timing=expand(
+            PROCESSED / "simulated" / "learning" / "p{p}_{task}_timing.csv",
+            p=PARTICIPANTS,
+            task=UNKNOWN_TASKS,
+        ),
     output:
-        PROCESSED / "simulated" / "learning.csv",
+        table=PROCESSED / "simulated" / "learning.csv",
+        timing=PROCESSED / "simulated" / "learning_timing.csv",
     log:
         "logs/simulate/learning_table.log",
     conda:
         "../envs/casa.yaml"
     shell:
-        "exec casa simulate learning-table --rows {input} --out {output} > {log} 2>&1"
+        "exec casa simulate learning-table --rows {input.rows} --out {output.table} "
+        "--timing-rows {input.timing} --timing {output.timing} > {log} 2>&1"
 
 
 rule simulated_study:
