@@ -27,6 +27,7 @@ shell.prefix("set -euo pipefail; export CASA_PARENT_PID=$PPID; ")
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/datasets.smk"
+include: "workflow/rules/replay.smk"
 include: "workflow/rules/stats.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/study.smk"

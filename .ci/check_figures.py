@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib.image import imread
 
 from casa_core import datasets, figures
+from casa_core.figures.replay import replay_figure
 
 PROCESSED, FIGS = Path("data/processed"), Path("figures")
 problems = []
@@ -49,6 +50,17 @@ check_panels(
     "arbitration", figures.arbitration_figure(read(PROCESSED / "case_study/arbitration.csv")), 2
 )
 check_panels("case_study", figures.case_study_figure(read(PROCESSED / "case_study/steps.csv")), 6)
+
+# casa replay: a PNG per replayed trial; the first one's figure has its three panels.
+replays = read(simulated / "replay" / "replay.csv")
+replayed = replays[replays["status"] == "replayed"]["trial"].tolist()
+if not replayed:
+    problems.append("simulated/replay: no trial replayed")
+for trial in replayed:
+    check_file(FIGS / "simulated" / "replay" / f"{trial}.replay.png")
+if replayed:
+    first = read(simulated / "replay" / f"{replayed[0]}.replay.csv")
+    check_panels(f"replay {replayed[0]}", replay_figure(first), 3)
 
 for problem in problems:
     print(f"check_figures: {problem}", file=sys.stderr)

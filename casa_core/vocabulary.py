@@ -86,6 +86,9 @@ TASK_CONDITIONS = {
 }
 
 
+#: The assistant's arbitration under each method (casa_core.assistant.Assistant): NA is
+#: direct teleoperation, PBA distance arbitration with beta = 1, CASA confidence arbitration.
+METHOD_ARBITRATION = {"NA": "none", "PBA": "distance", "CASA": "confidence"}
 #: The name of the intent learned in each unknown task.
 LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
 #: The inference presets (casa_core.presets): this project's, the original

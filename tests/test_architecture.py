@@ -62,6 +62,9 @@ FORBIDDEN = [
     (("casa_core.stats", "casa_core.figures"), ("casa_core.learning", "casa_core.library")),
     (("casa_core.stats", "casa_core.figures"), ("pybullet", "torch", "casa_core.skills")),
     (("casa_core.vocabulary", "casa_core.defaults"), ("casa_core", "numpy", "pandas")),
+    # Replay redoes inference over logs: no simulator, no study, no drawing.
+    (("casa_core.replay",), ("casa_core.study", "casa_core.robot.sim", "pybullet")),
+    (("casa_core.replay",), ("casa_core.figures", "casa_core.cli", "casa_core.planning")),
 ]
 
 

@@ -33,10 +33,11 @@ from casa_core.robot.keys import check_keys, format_keys, keys_to_action
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import Scene
 from casa_core.study.key_sources import KeySource
+from casa_core.vocabulary import METHOD_ARBITRATION as LOGGED_ARBITRATION
 from casa_core.vocabulary import METHODS, TASK_PHASES
 
-#: Arbitration of the assistant under each method.
-METHOD_ARBITRATION = {"NA": "none", "PBA": "distance", "CASA": "confidence", "BELIEF": "belief"}
+#: Every method's arbitration, and BELIEF's (the arbitration analysis only).
+METHOD_ARBITRATION = {**LOGGED_ARBITRATION, "BELIEF": "belief"}
 #: The goals the robot knows from the start (paper, Sec. IV).
 KNOWN_GOALS = ("green", "purple")
 

@@ -101,6 +101,13 @@ def dataset_scene(wildcards):
     return str(own) if own.is_file() else config["scene"]
 
 
+def replay_intents(wildcards):
+    """The learned intents a replay of a generated dataset needs (workflow/rules/study.smk)."""
+    if wildcards.ds not in GENERATED:
+        return []
+    return expand(INTENTS / "p{p}" / "{task}", p=PARTICIPANTS, task=UNKNOWN_TASKS)
+
+
 def has_surveys(ds):
     """Whether a dataset has Likert answers; generated datasets always do."""
     return ds in GENERATED or any((RAW / ds).rglob("surveys.csv"))
@@ -121,6 +128,8 @@ def dataset_outputs(ds):
     outputs.append(str(PROCESSED / ds / "stats.md"))
     figures = ["objective"] + (["likert"] if has_surveys(ds) else [])
     outputs += [str(FIGURES / ds / f"{f}.{ext}") for f in figures for ext in ("pdf", "png")]
+    # Each assisted trial replayed (workflow/rules/replay.smk).
+    outputs += [str(PROCESSED / ds / "replay"), str(FIGURES / ds / "replay")]
     return outputs
 
 

@@ -1,0 +1,240 @@
+"""``casa replay``: offline inference over recorded trial logs (:mod:`casa_core.replay`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from casa_core import vocabulary
+from casa_core.cli._options import example, positive_float
+
+#: Methods whose trials found in a folder are replayed unless --methods says otherwise.
+ASSISTED = ("PBA", "CASA")
+#: The columns of ``replay.csv``, one row per trial.
+SUMMARY_COLUMNS = [
+    "trial",
+    "participant",
+    "task",
+    "method",
+    "phase",
+    "preset",
+    "evidence",
+    "arbitration",
+    "steps",
+    "max_diff_beta",
+    "max_diff_belief",
+    "max_diff_alpha",
+    "status",
+    "reason",
+]
+
+
+def register(commands) -> None:
+    """Add this module's commands to the ``casa`` subcommands."""
+    command = commands.add_parser(
+        "replay",
+        help="redo the inference of recorded trials offline, with their own or other settings",
+        description="Replay the inference over each trial's logged states and keys; write "
+        "OUT/<stem>.replay.csv, FIGURES/<stem>.replay.png (stems mirror the trial's path "
+        "below the folder given) and OUT/replay.csv (one row per trial, with the largest "
+        "difference from the log's beta/belief/alpha). Default settings: each trial's own. "
+        "Trials found in folders are replayed when their method is one of --methods; a file "
+        "named is always replayed. Exit 1 if a log is invalid, 2 on bad arguments. "
+        "See docs/replay.md.",
+        **example(
+            "casa replay data/raw/simulated --out data/processed/simulated/replay "
+            "--intents data/processed/simulated/intents",
+            "casa replay data/raw/mine/p01/known_goal_NA.csv --arbitration confidence --out cf",
+        ),
+    )
+    command.add_argument(
+        "paths", nargs="+", metavar="PATH", help="a trial (file or stem) or a folder"
+    )
+    command.add_argument("--out", required=True, metavar="DIR", help="folder of the tables")
+    command.add_argument("--figures", metavar="DIR", help="folder of the figures (default: --out)")
+    command.add_argument("--preset", choices=vocabulary.PRESET_NAMES, help="inference preset")
+    command.add_argument("--evidence", choices=vocabulary.EVIDENCE, help="what the evidence is")
+    command.add_argument(
+        "--arbitration", help="confidence, distance, belief or none (default: the method's)"
+    )
+    command.add_argument("--lam", type=_nonnegative_float, help="rate of the prior on beta")
+    command.add_argument(
+        "--epsilon", type=positive_float, help="misspecification threshold (default 1.0)"
+    )
+    command.add_argument(
+        "--intents",
+        metavar="LIBRARY",
+        help="learned intents: a *.intent.json or a folder of them (a subfolder named after "
+        "a trial's participant serves that participant's trials)",
+    )
+    command.add_argument(
+        "--scene",
+        metavar="YAML",
+        help="scene (default: the folder's scene.yaml if it has one, else the package's)",
+    )
+    command.add_argument(
+        "--methods",
+        nargs="+",
+        choices=vocabulary.METHODS,
+        default=list(ASSISTED),
+        help="methods of the trials found in folders to replay (default: PBA CASA)",
+    )
+    command.add_argument(
+        "--allow-invalid", action="store_true", help="list invalid logs in replay.csv and go on"
+    )
+    command.set_defaults(func=_replay)
+
+
+def _nonnegative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
+def _fail(message: str) -> int:
+    print(f"casa replay: {message}", file=sys.stderr)
+    return 2
+
+
+def _replay(args) -> int:
+    from casa_core.assistant import ARBITRATIONS
+    from casa_core.defaults import EPSILON
+    from casa_core.scene import load_scene
+
+    if args.arbitration is not None and args.arbitration not in ARBITRATIONS:
+        return _fail(
+            f"--arbitration {args.arbitration!r}: expected one of {', '.join(ARBITRATIONS)}"
+        )
+    if args.intents is not None and not Path(args.intents).exists():
+        return _fail(f"--intents {args.intents}: no such file or folder")
+    given = load_scene(args.scene) if args.scene else None
+    trials, problems, missing = _collect(args.paths)
+    if missing:
+        return _fail("; ".join(f"{path}: no such trial, file or folder" for path in missing))
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    if any(problem.is_error for problem in problems) and not args.allow_invalid:
+        print(
+            "casa replay: invalid log(s); see casa validate (or --allow-invalid)", file=sys.stderr
+        )
+        return 1
+    seen: dict[Path, Path] = {}
+    for trial in trials:
+        if trial["stem"] in seen:
+            return _fail(
+                f"{trial['file']} and {seen[trial['stem']]} would both be written as "
+                f"{trial['stem']}.replay.csv; replay them separately"
+            )
+        seen[trial["stem"]] = trial["file"]
+    scenes: dict[Path, object] = {}
+    epsilon = EPSILON if args.epsilon is None else args.epsilon
+    out, figures = Path(args.out), Path(args.figures or args.out)
+    rows = []
+    for trial in trials:
+        root = trial["root"]
+        if given is None and root not in scenes:
+            own = root / "scene.yaml"
+            scenes[root] = load_scene(own if trial["folder"] and own.is_file() else None)
+        scene = given or scenes[root]
+        rows.append(_replay_one(trial, scene, args, epsilon, out, figures))
+    return _summarise(rows, out)
+
+
+def _collect(paths) -> tuple[list[dict], list, list[str]]:
+    """The trials below the paths (with their output stems), the problems, missing paths."""
+    from casa_core.io import check_paths, trial_files, trial_stem
+
+    trials, problems, missing = [], [], []
+    for text in paths:
+        path = Path(text)
+        if not path.exists() and trial_files(path)[1].is_file():
+            path = trial_files(path)[1]  # a stem names its trial
+        if not path.exists():
+            missing.append(text)
+            continue
+        folder = path.is_dir()
+        root = path if folder else path.parent
+        for check in check_paths([path]):
+            problems += check.problems
+            if check.kind != "trial":
+                continue
+            stem = trial_stem(check.file).relative_to(root)
+            trials.append(
+                {"file": check.file, "root": root, "folder": folder, "stem": stem, "check": check}
+            )
+    return trials, problems, missing
+
+
+def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
+    from casa_core.figures.replay import replay_figure
+    from casa_core.figures.style import save_figure
+    from casa_core.io import write_csv
+    from casa_core.replay import library_files, replay_differences, replay_trial, trial_settings
+
+    check = trial["check"]
+    meta = check.meta or {}
+    row = {key: meta.get(key, "") for key in ("participant", "task", "method", "phase")}
+    row["trial"] = trial["stem"].as_posix()
+    if not check.ok:
+        return {**row, "status": "invalid", "reason": str(check.errors[0])}
+    if trial["folder"] and meta["method"] not in args.methods:
+        reason = f"method {meta['method']} is not in --methods ({' '.join(args.methods)})"
+        return {**row, "status": "skipped", "reason": reason}
+    try:
+        chosen, arbitration = trial_settings(
+            meta, preset=args.preset, evidence=args.evidence, arbitration=args.arbitration
+        )
+        row.update(preset=chosen.name, evidence=chosen.evidence, arbitration=arbitration)
+        replayed = replay_trial(
+            meta,
+            check.frame,
+            scene,
+            preset=args.preset,
+            evidence=args.evidence,
+            arbitration=args.arbitration,
+            lam=args.lam,
+            epsilon=epsilon,
+            learned=library_files(args.intents, meta["participant"]),
+        )
+    except ValueError as error:  # ReplayError, LibraryError: the trial is left out, said why
+        return {**row, "status": "skipped", "reason": f"{trial['file']}: {error}"}
+    stem = trial["stem"]
+    write_csv(out / stem.parent / f"{stem.name}.replay.csv", replayed)
+    title = (
+        f"{stem.as_posix()}: {meta['method']} trial of {meta['participant']} "
+        f"({meta['task']}, {meta['phase']}) replayed with preset {chosen.name}, evidence "
+        f"{chosen.evidence}, arbitration {arbitration}"
+    )
+    fig = replay_figure(replayed, epsilon=epsilon, title=title)
+    save_figure(fig, figures / stem.parent / f"{stem.name}.replay", formats=("png",))
+    differences = replay_differences(check.frame, replayed)
+    row.update({f"max_diff_{key}": value for key, value in differences.items()})
+    return {**row, "steps": int(replayed["t"].nunique()), "status": "replayed", "reason": ""}
+
+
+def _summarise(rows: list[dict], out: Path) -> int:
+    import pandas as pd
+
+    from casa_core.io import write_csv
+
+    table = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
+    table["steps"] = table["steps"].astype("Int64")  # empty, not NaN, where not replayed
+    write_csv(out / "replay.csv", table)
+    counts = table["status"].value_counts()
+    for _, row in table[table["status"] != "replayed"].iterrows():
+        if row["status"] != "skipped" or not str(row["reason"]).startswith("method "):
+            print(f"casa replay: {row['trial']} {row['status']}: {row['reason']}", file=sys.stderr)
+    largest = table[["max_diff_beta", "max_diff_belief", "max_diff_alpha"]].max()
+    print(
+        f"casa replay: {int(counts.get('replayed', 0))} trial(s) replayed, "
+        f"{int(counts.get('skipped', 0))} skipped, {int(counts.get('invalid', 0))} invalid "
+        f"-> {out}; largest difference from the logs: beta {largest.iloc[0]:.3g}, "
+        f"belief {largest.iloc[1]:.3g}, alpha {largest.iloc[2]:.3g}"
+    )
+    return 0
