@@ -155,6 +155,8 @@ def _convert(path: Path, name: SessionName, participant: str, target: Path):
         "source": "human",
         "intents": names,
         "max_duration": HORIZON,
+        # The original's own numerics (casa_core.presets): a replay redoes them.
+        "inference": {"preset": "original", "evidence": "executed"},
         "notes": notes,
     }
     if (start := started_at(session)) is not None:

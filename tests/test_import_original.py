@@ -348,3 +348,21 @@ def test_the_workflow_processes_an_imported_dataset_with_its_scene(sessions, tmp
     assert result.returncode == 0, result.stderr
     trials = pd.read_csv(repo / target, keep_default_na=False)
     assert len(trials) == 4 and set(trials["dataset"]) == {"original"}
+    # The default target takes the imported dataset all the way: its statistics, its
+    # figures and the replay of its assisted trials, with its own scene.
+    result = snakemake(repo, "--config", "simulate=false")
+    assert result.returncode == 0, result.stderr
+    replayed = pd.read_csv(repo / "data/processed/original/replay/replay.csv")
+    status = dict(zip(replayed["trial"], replayed["status"], strict=True))
+    # NA is not replayed by default; the original's learned intents are not imported.
+    assert status == {
+        "P03/task1a": "skipped",
+        "P03/task1b": "replayed",
+        "P03/task1c": "replayed",
+        "P03/task2c_learned": "skipped",
+    }
+    assert set(replayed.loc[replayed["status"] == "replayed", "preset"]) == {"original"}
+    assert list((repo / "figures/original/replay").rglob("*.replay.png"))
+    for name in ("objective.png", "objective.pdf"):
+        assert (repo / "figures/original" / name).stat().st_size > 0
+    assert (repo / "data/processed/original/stats.md").exists()
