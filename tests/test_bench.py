@@ -105,7 +105,12 @@ def test_table_explains_three_goals_no_faster_than_four():
 def test_every_numeric_option_is_range_checked():
     from casa_core.cli import _options, all_parsers, build_parser
 
-    checked = {_options.positive_int, _options.nonnegative_int, _options.positive_float}
+    checked = {
+        _options.positive_int,
+        _options.nonnegative_int,
+        _options.positive_float,
+        _options.nonnegative_float,
+    }
     typed = [
         (parser.prog, action.option_strings, action.type)
         for parser in all_parsers(build_parser())

@@ -89,10 +89,30 @@ def positive_float(text: str) -> float:
     ...
     argparse.ArgumentTypeError: must be a finite number > 0, got 'nan'
     """
+    return _number(text, 0.0, strict=True)
+
+
+def nonnegative_float(text: str) -> float:
+    """An argparse ``type``: a finite number >= 0 (a prior's rate, where 0 means none).
+
+    Examples
+    --------
+    >>> nonnegative_float("0")
+    0.0
+    >>> nonnegative_float("-1")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: must be a finite number >= 0, got '-1'
+    """
+    return _number(text, 0.0, strict=False)
+
+
+def _number(text: str, low: float, *, strict: bool) -> float:
     try:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
+    if not (math.isfinite(value) and (value > low if strict else value >= low)):
+        bound = f"{'>' if strict else '>='} {low:g}"
+        raise argparse.ArgumentTypeError(f"must be a finite number {bound}, got {text!r}")
     return value

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import argparse
-import math
 import sys
 from pathlib import Path
 
 from casa_core import vocabulary
-from casa_core.cli._options import example, positive_float
+from casa_core.cli._options import example, nonnegative_float, positive_float
 
 #: Methods whose trials found in a folder are replayed unless --methods says otherwise.
 ASSISTED = ("PBA", "CASA")
@@ -59,7 +57,7 @@ def register(commands) -> None:
     command.add_argument(
         "--arbitration", help="confidence, distance, belief or none (default: the method's)"
     )
-    command.add_argument("--lam", type=_nonnegative_float, help="rate of the prior on beta")
+    command.add_argument("--lam", type=nonnegative_float, help="rate of the prior on beta")
     command.add_argument(
         "--epsilon", type=positive_float, help="misspecification threshold (default 1.0)"
     )
@@ -85,16 +83,6 @@ def register(commands) -> None:
         "--allow-invalid", action="store_true", help="list invalid logs in replay.csv and go on"
     )
     command.set_defaults(func=_replay)
-
-
-def _nonnegative_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
-    return value
 
 
 def _fail(message: str) -> int:
