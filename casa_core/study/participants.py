@@ -36,6 +36,48 @@ Population parameters (fixed before any result was looked at; distributions in
 
 The expert of the case study has a short delay, little noise, no lapses and no
 wrong keys.
+
+Two operator models share this machinery (config key ``simulation.operator``):
+
+- *lookahead* (:class:`SimulatedParticipant`) steers toward a point
+  :data:`LOOKAHEAD` ahead on the path and holds a key while the error to it along an
+  axis exceeds the deadband, so on the path it always holds a key, also when the
+  robot already carries the arm along.
+- *predictive* (:class:`PredictiveParticipant`) acts on where the arm is heading. It
+  low-pass filters its perceived positions into a velocity, predicts the arm's
+  position its own reaction time plus a lead time ahead, and holds a key on an axis
+  only when that prediction leaves the path by more than the deadband, or falls
+  behind the point of the reference that far ahead by more than the deadband (a
+  stopped arm falls behind, so it still drives the arm itself); otherwise it
+  releases the keys and lets the robot work. It reacts to events (the prediction
+  crossing the deadband), not to every change: intermittent, event-driven control
+  (Gawthrop, Loram, Lakie & Gollee 2011, "Intermittent control: a computational
+  theory of human control", *Biological Cybernetics* 104(1-2)), whose predictor
+  likewise bridges the operator's own delay.
+
+The predictive operator's two parameters, fixed from the manual-control literature
+before any result was looked at:
+
+- :data:`LEAD_TIME` T_L = 0.5 s. In McRuer's crossover model (McRuer & Jex 1967,
+  "A review of quasi-linear pilot models", *IEEE Trans. Human Factors in
+  Electronics* HFE-8(3); McRuer 1980, "Human dynamics in man-machine systems",
+  *Automatica* 16(3)) the operator adapts lead and lag so that the open loop is
+  about omega_c e^{-tau s} / s near crossover, with an effective delay tau of
+  0.1-0.4 s. A key sets the arm's velocity (a rate-command element, K/s), for which
+  the model needs no lead; sluggish elements draw lead time constants up to about
+  1-2 s. The robot's share makes the arm move in ways the keys do not command, so
+  we take a lead between the two, 0.5 s, added to the participant's own reaction
+  time (the delay its prediction bridges): the prediction horizon is
+  ``reaction_time + LEAD_TIME``. The filtered velocity times that horizon is the
+  crossover model's lead-lag equaliser (T_L s + 1) / (T_I s + 1) applied to the
+  perceived position, with T_I = :data:`VELOCITY_FILTER`.
+- :data:`VELOCITY_FILTER` T_I = 1.0 s, the time constant of the velocity estimate.
+  Humans integrate visual motion over several hundred ms up to about 1 s, and less
+  perfectly for motion in depth (Katz, Hennig, Cormack & Huk 2015, "A distinct
+  mechanism of temporal integration for motion through depth", *J. Neurosci.*
+  35(28)); depth is the noisiest axis here. A shorter filter would turn the
+  perception noise above (AR(1), 0.5 s) into velocity errors larger than the
+  deadband.
 """
 
 from __future__ import annotations
@@ -51,6 +93,10 @@ from casa_core.robot.keys import AXIS_KEYS
 ROT_TO_METRES = 0.1
 LOOKAHEAD = 0.04  # m of path ahead that the participant steers toward
 DONE_ROT_TOLERANCE = 0.15  # rad
+#: The predictive operator's lead time constant T_L, s (module docstring).
+LEAD_TIME = 0.5
+#: Time constant of the predictive operator's velocity estimate, s (module docstring).
+VELOCITY_FILTER = 1.0
 
 
 @dataclass(frozen=True)
@@ -123,6 +169,8 @@ class SimulatedParticipant:
         self.reference = np.asarray(reference, dtype=float)[:, 1:5]
         self.rng = rng
         self.tick = tick
+        # The path with rotation in metres (ROT_TO_METRES), so that distances mix the two.
+        self._scaled = self.reference * np.array([1.0, 1.0, 1.0, ROT_TO_METRES])
         self._seen = deque()  # (t, state) not yet perceived
         self._perceived = None
         self._noise = np.zeros(3)
@@ -144,7 +192,7 @@ class SimulatedParticipant:
             self._lapse_until = t + self.params.lapse_duration * self.rng.uniform(0.5, 1.5)
             return self._held
         perceived = self._perceive()
-        error = self._error(perceived)
+        error = self._error(perceived, t)
         if error is None:
             self.done = True
             self._held = frozenset()
@@ -162,26 +210,30 @@ class SimulatedParticipant:
         perceived[:3] += self._noise
         return perceived
 
-    def _error(self, perceived: np.ndarray) -> np.ndarray | None:
+    def _error(self, perceived: np.ndarray, t: float) -> np.ndarray | None:
         """Error to the steering point ahead on the path; None once the task is done."""
-        scaled = self.reference.copy()
-        scaled[:, 3] *= ROT_TO_METRES
+        ahead = self._track(perceived)
+        if self._arrived(perceived, ahead):
+            return None
+        return self.reference[min(ahead, len(self.reference) - 1)] - perceived
+
+    def _track(self, perceived: np.ndarray) -> int:
+        """Advance the progress along the path to ``perceived``; the steering point's index."""
         here = perceived.copy()
         here[3] *= ROT_TO_METRES
-        window = scaled[self._progress : self._progress + 40]
+        window = self._scaled[self._progress : self._progress + 40]
         self._progress += int(np.argmin(np.linalg.norm(window - here, axis=1)))
-        path = np.linalg.norm(np.diff(scaled[self._progress :], axis=0), axis=1)
-        ahead = self._progress + int(np.searchsorted(np.cumsum(path), LOOKAHEAD))
-        target = self.reference[min(ahead, len(self.reference) - 1)]
+        path = np.linalg.norm(np.diff(self._scaled[self._progress :], axis=0), axis=1)
+        return self._progress + int(np.searchsorted(np.cumsum(path), LOOKAHEAD))
+
+    def _arrived(self, perceived: np.ndarray, ahead: int) -> bool:
+        """Whether the steering point is the path's end and the arm is seen there."""
         final = self.reference[-1]
-        at_end = ahead >= len(self.reference) - 1
-        if (
-            at_end
+        return bool(
+            ahead >= len(self.reference) - 1
             and np.linalg.norm(perceived[:3] - final[:3]) < self.params.deadband
             and abs(perceived[3] - final[3]) < DONE_ROT_TOLERANCE
-        ):
-            return None
-        return target - perceived
+        )
 
     def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
         magnitude = np.abs(error) * np.array([1.0, 1.0, 1.0, ROT_TO_METRES])
@@ -210,3 +262,126 @@ class SimulatedParticipant:
     def _wrong_key(self, key: str) -> str:
         others = [k for pair in AXIS_KEYS for k in pair if k != key]
         return others[self.rng.integers(len(others))]
+
+
+class PredictiveParticipant(SimulatedParticipant):
+    """An operator who acts on where the arm is heading (module docstring, *predictive*).
+
+    Perception, lapses, wrong keys and the end of the task are those of
+    :class:`SimulatedParticipant`; only the error the keys answer differs. The
+    operator filters the perceived positions into a velocity, predicts the arm
+    :data:`LEAD_TIME` plus its own reaction time ahead and presses only when that
+    prediction leaves the path, or falls behind the point of the reference that far
+    ahead, by more than the deadband.
+    """
+
+    def __init__(self, params: ParticipantParams, reference, *, rng, tick: float = 0.05):
+        super().__init__(params, reference, rng=rng, tick=tick)
+        self._times = np.asarray(reference, dtype=float)[:, 0]
+        steps = np.linalg.norm(np.diff(self._scaled, axis=0), axis=1)
+        self._arc = np.concatenate([[0.0], np.cumsum(steps)])
+        self._tangents = _unit_tangents(self._scaled)
+        self._velocity = np.zeros(4)
+        self._last: tuple[float, np.ndarray] | None = None
+        self._pushing = False
+
+    @property
+    def horizon(self) -> float:
+        """How far ahead of its (delayed) perception the operator predicts, s."""
+        return self.params.reaction_time + LEAD_TIME
+
+    def _error(self, perceived: np.ndarray, t: float) -> np.ndarray | None:
+        ahead = self._track(perceived)
+        self._estimate_velocity(perceived, t)
+        if self._arrived(perceived, ahead):
+            return None
+        horizon = self.horizon
+        scale = np.array([1.0, 1.0, 1.0, ROT_TO_METRES])
+        here = perceived * scale
+        predicted = here + self._velocity * scale * horizon
+        start = self._progress
+        last = len(self._scaled) - 1
+        # The predicted position's nearest path point, searched ahead of the progress.
+        window = self._scaled[start : start + int(horizon / self.tick) + 40]
+        nearest = start + int(np.argmin(np.linalg.norm(window - predicted, axis=1)))
+        tangent = self._tangents[nearest]
+        offset = predicted - self._scaled[nearest]
+        along = float(offset @ tangent)
+        correction = -(offset - along * tangent)  # back to the path, across it
+        wanted = min(int(np.searchsorted(self._times, self._times[start] + horizon)), last)
+        behind = self._arc[wanted] - (self._arc[nearest] + along)
+        threshold = self.params.deadband
+        if wanted == last and abs(tangent[3]) > 0.5:
+            # Ending on a turn: done only within DONE_ROT_TOLERANCE of the end's angle.
+            threshold = min(threshold, DONE_ROT_TOLERANCE * ROT_TO_METRES)
+        threshold = threshold / 3 if self._pushing else threshold
+        self._pushing = behind > threshold
+        if self._pushing:
+            # Along the path; the axis it runs along most gets the whole shortfall.
+            correction += behind * tangent / np.max(np.abs(tangent))
+        elif wanted == last:
+            # Past the end now (not just predicted to arrive): back to the end.
+            beyond = float((here - self._scaled[last]) @ self._tangents[last])
+            if beyond > self.params.deadband:
+                correction -= beyond * self._tangents[last]
+        return correction / scale
+
+    def _estimate_velocity(self, perceived: np.ndarray, t: float) -> None:
+        # First-order low-pass of the perceived displacement per second (VELOCITY_FILTER).
+        if self._last is not None and t > self._last[0]:
+            elapsed = t - self._last[0]
+            raw = (perceived - self._last[1]) / elapsed
+            self._velocity += (1 - np.exp(-elapsed / VELOCITY_FILTER)) * (raw - self._velocity)
+        self._last = (t, perceived.copy())
+
+
+def _unit_tangents(path: np.ndarray) -> np.ndarray:
+    """Unit direction of travel at each sample; a sample that does not move keeps the last."""
+    steps = np.diff(path, axis=0)
+    tangents = np.zeros_like(path)
+    direction = np.zeros(path.shape[1])
+    for i, step in enumerate(steps):
+        length = np.linalg.norm(step)
+        if length > 1e-12:
+            direction = step / length
+        tangents[i] = direction
+    tangents[-1] = direction
+    # Samples before the first move take the first direction.
+    first = next((i for i, step in enumerate(steps) if np.linalg.norm(step) > 1e-12), 0)
+    tangents[:first] = tangents[first]
+    return tangents
+
+
+#: The operator models, by the name of config key ``simulation.operator``.
+OPERATORS = {"lookahead": SimulatedParticipant, "predictive": PredictiveParticipant}
+
+
+def make_participant(
+    params: ParticipantParams,
+    reference,
+    *,
+    rng: np.random.Generator,
+    tick: float = 0.05,
+    operator: str,
+) -> SimulatedParticipant:
+    """The participant of operator model ``operator`` (a key of :data:`OPERATORS`).
+
+    Examples
+    --------
+    >>> from casa_core.scene import load_scene
+    >>> from casa_core.tasks import intended_trajectory
+    >>> params = ParticipantParams(0.35, 0.01, 0.015, 0.03, 0.8, 0.02, 2)
+    >>> reference = intended_trajectory("known_goal", load_scene())
+    >>> rng = np.random.default_rng(0)
+    >>> type(make_participant(params, reference, rng=rng, operator="predictive")).__name__
+    'PredictiveParticipant'
+    >>> make_participant(params, reference, rng=rng, operator="lead")
+    Traceback (most recent call last):
+    ...
+    ValueError: unknown operator model 'lead'; expected one of lookahead, predictive
+    """
+    if operator not in OPERATORS:
+        raise ValueError(
+            f"unknown operator model {operator!r}; expected one of {', '.join(OPERATORS)}"
+        )
+    return OPERATORS[operator](params, reference, rng=rng, tick=tick)

@@ -18,13 +18,14 @@ import numpy as np
 import pandas as pd
 
 from casa_core import metrics
+from casa_core.config import default
 from casa_core.defaults import DEMONSTRATIONS
 from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_trial, write_surveys
 from casa_core.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.scene import Scene
 from casa_core.study import likert, protocol
 from casa_core.study.closed_loop import as_preset, known_goal_intents, run_trial, trial_intents
-from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
+from casa_core.study.participants import ParticipantParams, draw_participants, make_participant
 from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import LEARNED_NAMES, UNANALYSED_PHASES, UNKNOWN_TASKS
 
@@ -81,7 +82,11 @@ def inference_preset(config: dict) -> Preset:
 
 def _run(scene, spec, settings, params, rng, pid, sim, inference, intents=None):
     reference = intended_trajectory(spec.task, scene)
-    source = SimulatedParticipant(params, reference, rng=rng, tick=scene.teleop.dt)
+    # The operator model (casa_core.study.participants); the schema's default if unset.
+    operator = settings.get("operator") or default("simulation.operator")
+    source = make_participant(
+        params, reference, rng=rng, tick=scene.teleop.dt, operator=operator
+    )
     result = run_trial(
         scene,
         spec.task,
@@ -317,6 +322,7 @@ def run_case_study(
         "demonstrations": DEMONSTRATIONS,
         "demonstrations_when": "always",
         "epsilon": case_study["epsilon"],
+        "operator": case_study.get("operator") or default("case_study.operator"),
     }
     before = work_dir / "logs" / "before"
     simulate_before_learning(
