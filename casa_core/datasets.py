@@ -29,6 +29,7 @@ from casa_core.io import CONDITION_KEYS, FileCheck, Problem, check_paths
 from casa_core.io.atomic import atomic_paths, frame_to_csv_text, write_csv
 from casa_core.io.contract import INTENT_PREFIXES
 from casa_core.scene import Scene
+from casa_core.vocabulary import ANSWERED_BY
 
 TRIAL_COLUMNS = (
     "dataset",
@@ -50,6 +51,10 @@ TRIAL_COLUMNS = (
     "relative_effort_ticks",
     "ticks",
     "trial",
+    # The inference settings the trial was run with (metadata "inference"; empty when
+    # its log does not say them).
+    "preset",
+    "evidence",
     # Whether the trial ran to its time limit (empty when its log does not say the
     # limit) and whether it ended where the task intends (casa_core.metrics).
     "timed_out",
@@ -77,6 +82,9 @@ LIKERT_COLUMNS = (
     "question",
     "score",
     "source",
+    # "model" for a simulated participant's answers (a formula's output), "participant"
+    # for a person's (casa_core.vocabulary.ANSWERED_BY), else "unknown".
+    "answered_by",
 )
 VALIDATION_COLUMNS = ("file", "kind", "status", "rule", "where", "message")
 
@@ -208,6 +216,7 @@ def _trials_and_steps(
                     frame, intended[task], dt=dt, max_duration=meta.get("max_duration")
                 ),
                 "trial": trial,
+                **_inference(meta),
             }
         )
         step_parts.append(_steps(frame, condition, dataset, trial))
@@ -220,6 +229,12 @@ def _trials_and_steps(
     steps = pd.concat(steps) if steps else pd.DataFrame(columns=list(STEP_COLUMNS))
     steps = steps[list(STEP_COLUMNS)].sort_values([*CONDITION_KEYS, "trial", "t", "intent"])
     return trials.reset_index(drop=True), steps.reset_index(drop=True)
+
+
+def _inference(meta: dict) -> dict:
+    """The trial's inference preset and evidence, empty when its metadata does not say."""
+    settings = meta.get("inference") or {}
+    return {key: settings.get(key, "") for key in ("preset", "evidence")}
 
 
 def _steps(frame: pd.DataFrame, condition: dict, dataset: str, trial: str) -> pd.DataFrame:
@@ -256,6 +271,7 @@ def _likert(checks: list[FileCheck], trials: pd.DataFrame, dataset: str) -> pd.D
         if "source" not in answers.columns:
             answers["source"] = answers["participant"].map(sources).fillna("unknown")
         answers["dataset"] = dataset
+        answers["answered_by"] = answers["source"].map(ANSWERED_BY).fillna("unknown")
         parts.append(answers)
     if not parts:
         return pd.DataFrame(columns=list(LIKERT_COLUMNS))

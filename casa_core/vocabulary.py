@@ -56,6 +56,9 @@ UNANALYSED_PHASES = ("familiarization", "demonstration")
 
 #: Who produced a log.
 SOURCES = ("human", "simulated")
+#: Who gave a Likert answer, by the answer's source: a simulated participant's answers
+#: are the output of an answer model (casa_core.study.likert), not a person's rating.
+ANSWERED_BY = {"human": "participant", "simulated": "model"}
 
 #: The eight keys of the keyboard interface: +- along x, y, z and the two rotate keys.
 KEYS = ("x+", "x-", "y+", "y-", "z+", "z-", "rot+", "rot-")

@@ -79,6 +79,7 @@ def test_the_landing_page_opens_on_results_then_figures_stats_tables_workflow(re
     anova = apa.result(h1[h1["analysis"] == "anova"].iloc[0])
     within = apa.result(h1[h1["analysis"] == "rm_anova"].iloc[0])
     order = [
+        "Claims of the paper on dataset pilot",  # results.md: a verdict per claim
         "Results of dataset pilot",  # the summary from stats.csv
         f"ANOVA: {anova}",
         f"repeated-measures ANOVA: {within}",
@@ -120,7 +121,8 @@ def test_screenshot_of_the_first_screen(report, page, tmp_path_factory):
 def test_the_report_pages_exist_for_the_menu_too(report):
     pages = report / "data" / "report" / "pilot"
     names = sorted(p.name for p in pages.iterdir())
-    assert names == ["stats.html", "summary.html", "trials.html", "validation.html"]
+    expected = ["results", "stats", "summary", "trials", "validation"]
+    assert names == [f"{name}.html" for name in expected]
     summary = (report / "data" / "processed" / "pilot" / "summary.md").read_text()
     assert summary.startswith("# Results of dataset pilot")
     # The landing page is embedded in a <script> of the report: none may end it early.

@@ -5,7 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from casa_core.cli._options import example
+from casa_core.cli._options import example, positive_float
+from casa_core.defaults import EPSILON
 
 #: One example per page, shown by each command's --help.
 _EXAMPLES = {
@@ -16,6 +17,13 @@ _EXAMPLES = {
     "--out data/report/simulated/stats.html",
     "table": "casa report table data/processed/simulated/trials.csv "
     "--out data/report/simulated/trials.html",
+    "results": "casa report results --dataset simulated --trials data/processed/simulated/"
+    "trials.csv \\\n      --steps data/processed/simulated/steps.csv --stats "
+    "data/processed/simulated/stats.csv \\\n      --likert "
+    "data/processed/simulated/likert.csv --arbitration "
+    "data/processed/case_study/arbitration.csv \\\n      --case-steps "
+    "data/processed/case_study/steps.csv --epsilon 1.0 "
+    "--out data/processed/simulated/results.md --out-html data/report/simulated/results.html",
 }
 
 
@@ -42,6 +50,30 @@ def register(commands) -> None:
     summary.add_argument("--out-md", required=True, metavar="MD", help="summary.md to write")
     summary.add_argument("--out-html", required=True, metavar="HTML", help="its HTML page")
     summary.set_defaults(func=_summary)
+    results = pages.add_parser(
+        "results",
+        help="each claim of the paper with its criterion, the numbers and a verdict",
+        **_example("results"),
+    )
+    for name, what in (("trials", "trials.csv"), ("steps", "steps.csv"), ("stats", "stats.csv")):
+        results.add_argument(f"--{name}", required=True, metavar="CSV", help=what)
+    results.add_argument("--likert", metavar="CSV", help="likert.csv (optional)")
+    results.add_argument(
+        "--arbitration", metavar="CSV", help="the case study's arbitration.csv (optional)"
+    )
+    results.add_argument(
+        "--case-steps", metavar="CSV", help="the case study's steps.csv (optional)"
+    )
+    results.add_argument("--dataset", required=True, help="the dataset's name, for the title")
+    results.add_argument(
+        "--epsilon",
+        type=positive_float,
+        default=EPSILON,
+        help=f"the misspecification threshold on beta_hat (default {EPSILON:g})",
+    )
+    results.add_argument("--out", required=True, metavar="MD", help="results.md to write")
+    results.add_argument("--out-html", metavar="HTML", help="its HTML page (optional)")
+    results.set_defaults(func=_results)
     markdown = pages.add_parser(
         "markdown",
         help="a Markdown file (e.g. stats.md) as HTML",
@@ -81,6 +113,34 @@ def _summary(args) -> int:
         args.out_html, report_pages.page(report_pages.markdown_html(text), title=title)
     )
     print(f"casa report: {args.out_md}, {args.out_html}")
+    return 0
+
+
+def _results(args) -> int:
+    from casa_core import datasets, report_pages
+    from casa_core.io.atomic import atomic_write_text
+    from casa_core.stats.claims import evaluate_claims
+    from casa_core.stats.results import results_markdown
+
+    names = ("trials", "steps", "stats", "likert", "arbitration", "case_steps")
+    try:
+        tables = {
+            name: datasets.read_table(getattr(args, name)) if getattr(args, name) else None
+            for name in names
+        }
+        claims = evaluate_claims(tables, epsilon=args.epsilon)
+        text = results_markdown(claims, tables, dataset=args.dataset)
+    except (OSError, ValueError) as error:
+        return _fail(error)
+    atomic_write_text(args.out, text)
+    written = [args.out]
+    if args.out_html:
+        title = f"Claims of the paper on dataset {args.dataset}"
+        page = report_pages.page(report_pages.markdown_html(text), title=title)
+        atomic_write_text(args.out_html, page)
+        written.append(args.out_html)
+    verdicts = ", ".join(f"{r.claim} {r.verdict}" for r in claims.itertuples())
+    print(f"casa report: {verdicts} -> {', '.join(written)}")
     return 0
 
 

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from casa_core import tables
 from casa_core.figures import _bars, style
 from casa_core.figures.objective import SIGNIFICANCE, parse_comparison, stars
+from casa_core.stats.study import answered_by_model
 from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
 
 SCALE = (1, 7)
@@ -121,7 +122,8 @@ def likert_figure(
         brackets over the two conditions in that task and question, and its
         ``friedman`` rows are written under each question (:func:`likert_tests`).
     title : str, optional
-        First words of the caption (default "Likert scores").
+        First words of the caption (default "Likert scores"); answers of simulated
+        participants add that they are model output.
 
     Returns
     -------
@@ -156,7 +158,13 @@ def likert_figure(
                 ax.yaxis.set_tick_params(labelleft=True)
                 break
         _bars.condition_legend(fig, axes)
-        caption = style.describe(title or "Likert scores", rows)
+        what = title or "Likert scores"
+        if answered_by_model(rows):
+            what += (
+                " (model output: answers computed by the simulated participants' model,"
+                " not people's ratings)"
+            )
+        caption = style.describe(what, rows)
         caption += (
             " Bars: mean ± standard error over participants of the answer to: the robot"
             " understood how I wanted the task done; made the interaction more effortless;"

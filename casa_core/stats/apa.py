@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from casa_core.stats.study import STATS_COLUMNS
+from casa_core.stats.study import MODEL_OUTPUT_NOTE, STATS_COLUMNS
 from casa_core.tables import require_columns
 
 #: Section titles of the report, one per hypothesis, in order.
@@ -41,6 +41,27 @@ _INTRODUCTION = (
     "mean(CASA) - mean(reference), the smallest margin at which CASA is non-inferior "
     "(lower is better for every metric)."
 )
+
+
+#: Said under H4's title when its answers are a model's output (:data:`MODEL_OUTPUT_NOTE`).
+MODEL_OUTPUT_SENTENCE = (
+    "The Likert answers are model output: simulated participants' answers computed by a "
+    "formula (casa_core/study/likert.py), not people's ratings. These tests describe the "
+    "model; they do not test H4."
+)
+
+
+def model_output_lines(rows: pd.DataFrame) -> list[str]:
+    """``[sentence, ""]`` when any of ``rows`` (a hypothesis' rows) was computed from a model.
+
+    Examples
+    --------
+    >>> model_output_lines(pd.DataFrame({"note": ["", MODEL_OUTPUT_NOTE]}))[0][:35]
+    'The Likert answers are model output'
+    """
+    notes = rows["note"].fillna("").astype(str)
+    model = notes.str.contains(MODEL_OUTPUT_NOTE, regex=False).any()
+    return [MODEL_OUTPUT_SENTENCE, ""] if model else []
 
 
 def _number(value: float, digits: int = 2) -> str:
@@ -217,6 +238,7 @@ def report_markdown(table: pd.DataFrame) -> str:
             "",
             f"## {title}",
             "",
+            *model_output_lines(part),
             "| Task | Metric | Analysis | Term | Result |",
             "| --- | --- | --- | --- | --- |",
         ]

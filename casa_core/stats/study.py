@@ -23,6 +23,7 @@ from casa_core.stats import between, within
 from casa_core.stats._rows import STATS_COLUMNS, Rows
 from casa_core.tables import numeric_column, require_columns
 from casa_core.vocabulary import (
+    ANSWERED_BY,
     CASA_AFTER_LEARNING,
     CASA_BEFORE_LEARNING,
     CONDITIONS,
@@ -41,6 +42,27 @@ CONDITION_ORDER = sorted(CONDITIONS, key=lambda c: not c.startswith("CASA"))
 TRIAL_KEYS = ["participant", "task", "method", "phase"]
 LIKERT_KEYS = [*TRIAL_KEYS, "question", "score"]
 ALPHA = 0.05
+#: Appended to the note of every H4 row computed from a model's answers.
+MODEL_OUTPUT_NOTE = "answers are model output (simulated participants), not people's ratings"
+
+
+def answered_by_model(likert: pd.DataFrame | None) -> bool:
+    """Whether any Likert answer is a model's output (a simulated participant's).
+
+    ``answered_by`` says so (``model``); a table without it, a ``source`` ``simulated``.
+
+    Examples
+    --------
+    >>> answered_by_model(pd.DataFrame({"source": ["human", "simulated"]}))
+    True
+    >>> answered_by_model(pd.DataFrame({"answered_by": ["participant"]}))
+    False
+    """
+    if likert is None or likert.empty:
+        return False
+    if "answered_by" in likert.columns:
+        return bool((likert["answered_by"] == ANSWERED_BY["simulated"]).any())
+    return "source" in likert.columns and bool((likert["source"] == "simulated").any())
 
 
 def _condition(method, phase, row, what: str) -> str | None:
@@ -278,7 +300,11 @@ def analyze_study(
         for task in misspecified:
             _objective(out, "H3", task, metric, _subset(cells, [task], h3), h3, False, margins)
     if likert is not None:
+        first = len(out.rows)
         _subjective(out, likert)
+        if answered_by_model(likert):
+            for row in out.rows[first:]:
+                row["note"] = "; ".join(x for x in (row["note"], MODEL_OUTPUT_NOTE) if x)
     table = pd.DataFrame(out.rows, columns=STATS_COLUMNS)
     table["noninferior"] = table["noninferior"].astype("boolean")
     table["n"] = table["n"].astype("Int64")

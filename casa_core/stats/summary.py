@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from casa_core.stats.apa import ANALYSIS_NAMES, TITLES, result
+from casa_core.stats.apa import ANALYSIS_NAMES, TITLES, model_output_lines, result
 from casa_core.stats.study import POOLED, STATS_COLUMNS
 from casa_core.tables import require_columns
 from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
@@ -145,6 +145,7 @@ def summary_markdown(stats: pd.DataFrame, *, dataset: str) -> str:
     <BLANKLINE>
     """
     summary = summary_table(stats)
+    notes = stats.assign(note=stats["note"].astype(object).fillna(""))
     lines = [
         f"# Results of dataset {dataset}",
         "",
@@ -158,6 +159,7 @@ def summary_markdown(stats: pd.DataFrame, *, dataset: str) -> str:
         if part.empty:
             continue
         lines += ["", f"## {title}", ""]
+        lines += model_output_lines(notes[notes["hypothesis"] == hypothesis])
         # One task: said once above the table rather than on every row.
         one_task = part["task"].nunique() == 1
         columns = ["measure", "paper", "within"] if one_task else list(SUMMARY_COLUMNS[1:])

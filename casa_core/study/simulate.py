@@ -84,9 +84,7 @@ def _run(scene, spec, settings, params, rng, pid, sim, inference, intents=None):
     reference = intended_trajectory(spec.task, scene)
     # The operator model (casa_core.study.participants); the schema's default if unset.
     operator = settings.get("operator") or default("simulation.operator")
-    source = make_participant(
-        params, reference, rng=rng, tick=scene.teleop.dt, operator=operator
-    )
+    source = make_participant(params, reference, rng=rng, tick=scene.teleop.dt, operator=operator)
     result = run_trial(
         scene,
         spec.task,

@@ -126,6 +126,8 @@ def dataset_outputs(ds):
     tables = ["trials", "steps", "likert", "stats", "validation"]
     outputs = [str(PROCESSED / ds / f"{name}.csv") for name in tables]
     outputs.append(str(PROCESSED / ds / "stats.md"))
+    # Each claim of the paper with its criterion and verdict (workflow/rules/report.smk).
+    outputs.append(str(PROCESSED / ds / "results.md"))
     figures = ["objective"] + (["likert"] if has_surveys(ds) else [])
     outputs += [str(FIGURES / ds / f"{f}.{ext}") for f in figures for ext in ("pdf", "png")]
     # Each assisted trial replayed (workflow/rules/replay.smk).
@@ -152,11 +154,33 @@ REPORT_TABLES = ("trials", "validation")
 
 def report_pages():
     pages = [str(PROCESSED / ds / "summary.md") for ds in DATASETS]
-    names = ("summary", "stats", *REPORT_TABLES)
+    names = ("results", "summary", "stats", *REPORT_TABLES)
     pages += [str(REPORT / ds / f"{name}.html") for ds in DATASETS for name in names]
     if SIMULATE:
         pages.append(str(REPORT / "simulated" / "learning.html"))
     return pages
+
+
+def results_input(wildcards):
+    """The tables results.md judges; the simulated study's also the case study's.
+
+    The case study runs along the config's scene, the simulated study's, so its claims
+    (C3, and C1, C2, C4 on the expert) are judged there; another dataset's results.md
+    says it cannot test C3.
+    """
+    folder = PROCESSED / wildcards.ds
+    tables = {name: folder / f"{name}.csv" for name in ("trials", "steps", "stats", "likert")}
+    if CASE_STUDY and wildcards.ds in GENERATED:
+        tables["arbitration"] = PROCESSED / "case_study" / "arbitration.csv"
+        tables["case_steps"] = PROCESSED / "case_study" / "steps.csv"
+    return tables
+
+
+def case_study_options(wildcards, input):
+    """The case study's tables as options of `casa report results`, when they are inputs."""
+    names = {"arbitration": "--arbitration", "case_steps": "--case-steps"}
+    paths = {flag: getattr(input, name, None) for name, flag in names.items()}
+    return " ".join(f"{flag} {path}" for flag, path in paths.items() if path)
 
 
 def stats_input(wildcards):

@@ -1,6 +1,7 @@
-# The HTML report's pages (`snakemake --report report.html`): per dataset a results
-# summary from stats.csv, stats.md rendered, and the tables as browsable HTML, which the
-# report shows inline (a CSV or Markdown item could only be downloaded). The landing
+# The HTML report's pages (`snakemake --report report.html`): per dataset the paper's
+# claims judged (results.md), a results summary from stats.csv, stats.md rendered, and
+# the tables as browsable HTML, which the report shows inline (a CSV or Markdown item
+# could only be downloaded). The landing
 # page, workflow/report/workflow.rst, includes them in that order. Their paths:
 # report_pages() in common.smk.
 
@@ -23,6 +24,31 @@ rule report_summary:
     shell:
         "exec casa report summary --stats {input.stats} --dataset {wildcards.ds} "
         "--out-md {output.md} --out-html {output.html} > {log} 2>&1"
+
+
+rule report_results:
+    input:
+        unpack(results_input),
+    output:
+        md=PROCESSED / "{ds}" / "results.md",
+        html=report(
+            REPORT / "{ds}" / "results.html",
+            caption="../report/results.rst",
+            category="{ds}",
+            subcategory="results",
+        ),
+    log:
+        "logs/report/{ds}/results.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        case_study=case_study_options,
+        epsilon=config["simulation"]["epsilon"],
+    shell:
+        "exec casa report results --dataset {wildcards.ds} --trials {input.trials} "
+        "--steps {input.steps} --stats {input.stats} --likert {input.likert} "
+        "{params.case_study} --epsilon {params.epsilon} --out {output.md} "
+        "--out-html {output.html} > {log} 2>&1"
 
 
 rule report_stats:

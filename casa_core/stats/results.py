@@ -1,0 +1,150 @@
+"""``results.md``: the paper's claims on one dataset, as :mod:`casa_core.stats.claims` judges them.
+
+It opens with what the data are (the dataset, how many participants, whether they are
+simulated, the inference settings of the trials), then a table of verdicts, then per
+claim the paper's words, the criterion, the numbers measured and the verdict, saying
+plainly where it differs from the paper. Every number is read from the tables.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import pandas as pd
+
+from casa_core.stats.claims import CLAIM_COLUMNS, MODEL_OUTPUT, answered_by_model
+from casa_core.tables import require_columns
+
+#: What each verdict means next to the paper, said under the claim.
+VERDICT_WORDS = {
+    "holds": "as the paper reports.",
+    "partly": "only in part: the paper reports it in full, these data show it only in part.",
+    "differs": "this differs from the paper: the paper reports it, these data do not show it.",
+    "not testable": "these data cannot decide it (see the numbers above).",
+    MODEL_OUTPUT: (
+        "the Likert answers of this dataset are the output of a model of simulated "
+        "participants (casa_core/study/likert.py), not ratings by people, so they cannot "
+        "test what people believe: H4 is not reproduced here."
+    ),
+}
+
+
+def _values(frame: pd.DataFrame | None, column: str) -> list[str]:
+    if frame is None or column not in frame.columns:
+        return []
+    return sorted({str(v) for v in frame[column].dropna() if str(v)})
+
+
+def facts(tables: Mapping[str, pd.DataFrame | None]) -> list[str]:
+    """Sentences on what the data are: participants, source, inference settings, answers.
+
+    Examples
+    --------
+    >>> trials = pd.DataFrame({"participant": ["p1", "p2"], "source": "simulated",
+    ...                        "preset": "casa", "evidence": "commanded"})
+    >>> for line in facts({"trials": trials}):
+    ...     print(line)
+    Participants: 2 (in trials.csv).
+    Source: simulated (the participants are a model, not people).
+    Inference preset: casa; evidence: commanded.
+    """
+    trials = tables["trials"]
+    n = trials["participant"].nunique() if "participant" in trials.columns else 0
+    lines = [f"Participants: {n} (in trials.csv)."]
+    sources = _values(trials, "source")
+    if sources == ["simulated"]:
+        lines.append("Source: simulated (the participants are a model, not people).")
+    elif "simulated" in sources:
+        lines.append(f"Source: {', '.join(sources)} (some participants are a model).")
+    else:
+        lines.append(f"Source: {', '.join(sources) or 'not recorded'}.")
+    presets, evidence = _values(trials, "preset"), _values(trials, "evidence")
+    lines.append(
+        f"Inference preset: {', '.join(presets) or 'not recorded in the logs'}; "
+        f"evidence: {', '.join(evidence) or 'not recorded in the logs'}."
+    )
+    likert = tables.get("likert")
+    if answered_by_model(likert):
+        lines.append("Likert answers: model output (simulated participants), not people's.")
+    return lines
+
+
+def _cell(text) -> str:
+    return str(text).replace("|", "/")
+
+
+def results_markdown(
+    claims: pd.DataFrame, tables: Mapping[str, pd.DataFrame | None], *, dataset: str
+) -> str:
+    """The Markdown of ``results.md`` from :func:`casa_core.stats.claims.evaluate_claims`.
+
+    Parameters
+    ----------
+    claims : pandas.DataFrame
+        The claims table (columns :data:`casa_core.stats.claims.CLAIM_COLUMNS`).
+    tables : mapping
+        The tables the claims were judged on (``trials``, optional ``likert``), for the
+        opening sentences (:func:`facts`).
+    dataset : str
+        The dataset's name, for the title.
+
+    Returns
+    -------
+    str
+        A title, what the data are, a table of the verdicts, then a section per claim.
+
+    Examples
+    --------
+    >>> claims = pd.DataFrame([{"claim": "C1", "statement": "goal confident",
+    ...     "criterion": "holds: all", "measured": "1 of 1 trials", "value": 1.0,
+    ...     "verdict": "holds", "details": ""}])
+    >>> trials = pd.DataFrame({"participant": ["p1"], "source": ["human"]})
+    >>> text = results_markdown(claims, {"trials": trials}, dataset="lab")
+    >>> print(text.split("## ")[1])
+    C1: holds
+    <BLANKLINE>
+    Paper: goal confident
+    <BLANKLINE>
+    Criterion: holds: all.
+    <BLANKLINE>
+    Measured: 1 of 1 trials.
+    <BLANKLINE>
+    Verdict: holds, as the paper reports.
+    <BLANKLINE>
+    """
+    require_columns(claims, CLAIM_COLUMNS, "claims table")
+    lines = [f"# Claims of the paper on dataset {dataset}", ""]
+    lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
+    lines += [
+        "Each claim of the paper (C1-C4: what it observed in its expert case study, Sec. "
+        "IV, judged on this dataset's trials and, as \"expert\", on the case study's; "
+        "H1-H4: the user study's hypotheses, Sec. V) with the criterion it is judged by, "
+        "the numbers measured in this dataset's tables and a verdict: holds, partly, "
+        "differs, or not testable. The thresholds are fixed in casa_core/stats/claims.py.",
+        "",
+        "| Claim | Verdict | Measured |",
+        "| --- | --- | --- |",
+    ]
+    for row in claims.itertuples():
+        lines.append(f"| {row.claim} | {row.verdict} | {_cell(row.measured)} |")
+    for row in claims.itertuples():
+        lines += [
+            "",
+            f"## {row.claim}: {row.verdict}",
+            "",
+            f"Paper: {row.statement}",
+            "",
+            f"Criterion: {row.criterion}.",
+            "",
+            f"Measured: {row.measured}.",
+            "",
+            f"Verdict: {row.verdict}, {VERDICT_WORDS.get(row.verdict, '')}".rstrip(", "),
+        ]
+        details = [] if pd.isna(row.details) else str(row.details).splitlines()
+        details = [d for d in details if d]
+        if details:
+            lines += ["", "| Check | Outcome |", "| --- | --- |"]
+            for detail in details:
+                check, _, outcome = detail.rpartition(": ")
+                lines.append(f"| {_cell(check)} | {outcome} |")
+    return "\n".join(lines) + "\n"
