@@ -208,7 +208,8 @@ def save_intent(
         "guides": [g.tolist() for g in intent.guides],
         "demo_hashes": [demo_hash(d) for d in demos],
         "irl_config": {k: v for k, v in asdict(config).items() if k != "planner"},
-        "history": history,
+        # Measured times stay out, so that one config gives the same file on every run.
+        "history": [{k: v for k, v in h.items() if k != "seconds"} for h in history],
         "weights": _encode_weights(intent.network),
     }
     payload["checksum"] = hashlib.sha256(_canonical(payload)).hexdigest()

@@ -434,3 +434,11 @@ def test_no_flipped_bit_gives_a_traceback_or_another_intent(tmp_path):
         assert all(torch.equal(a, b) for a, b in parameters)
     assert set(outcomes) <= {"readable", "json", "checksum", "format", "version", "required-key"}
     assert sum(outcomes.values()) >= 290  # nearly every flip changes the meaning
+
+
+def test_measured_times_are_not_stored_so_a_file_is_the_same_bytes_on_every_run(tmp_path):
+    timed = [{**HISTORY[0], "seconds": 0.123}]
+    first = save(tmp_path / "a", history=timed).read_bytes()
+    second = save(tmp_path / "b", history=[{**HISTORY[0], "seconds": 9.87}]).read_bytes()
+    assert first == second and b"seconds" not in first
+    assert library.load_intent(tmp_path / "a" / "red_p01.intent.json").metadata["history"] == HISTORY
