@@ -441,4 +441,5 @@ def test_measured_times_are_not_stored_so_a_file_is_the_same_bytes_on_every_run(
     first = save(tmp_path / "a", history=timed).read_bytes()
     second = save(tmp_path / "b", history=[{**HISTORY[0], "seconds": 9.87}]).read_bytes()
     assert first == second and b"seconds" not in first
-    assert library.load_intent(tmp_path / "a" / "red_p01.intent.json").metadata["history"] == HISTORY
+    stored = library.load_intent(tmp_path / "a" / "red_p01.intent.json")
+    assert stored.metadata["history"] == HISTORY
