@@ -32,6 +32,8 @@ include: "workflow/rules/stats.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/study.smk"
 include: "workflow/rules/report.smk"
+# `snakemake --cores all robustness`: the claims under each modelling variant.
+include: "workflow/rules/robustness.smk"
 
 
 # The report's landing page: results, figures, statistics, tables, then the workflow.

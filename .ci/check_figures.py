@@ -14,6 +14,8 @@ from casa_core.figures.replay import replay_figure
 
 PROCESSED, FIGS = Path("data/processed"), Path("figures")
 problems = []
+# `check_figures.py robustness`: only the robustness target's table and figure.
+ROBUSTNESS = sys.argv[1:] == ["robustness"]
 
 
 def check_file(path: Path) -> None:
@@ -27,11 +29,29 @@ def check_file(path: Path) -> None:
             problems.append(f"{path}: blank image")
 
 
+def finish(done: str) -> None:
+    for problem in problems:
+        print(f"check_figures: {problem}", file=sys.stderr)
+    print(f"check_figures: {'FAILED' if problems else done}")
+    sys.exit(1 if problems else 0)
+
+
 def check_panels(name: str, figure, expected: int) -> None:
     panels = [axis for axis in figure.axes if axis.has_data()]
     if len(panels) < expected:
         problems.append(f"{name}: {len(panels)} panel(s) with data, expected {expected}")
 
+
+if ROBUSTNESS:
+    from casa_core.figures.robustness import robustness_figure
+
+    for ext in ("pdf", "png"):
+        check_file(FIGS / f"robustness.{ext}")
+    table = datasets.read_table(PROCESSED / "robustness" / "claims.csv")
+    if table["variant"].nunique() < 2:
+        problems.append("robustness/claims.csv: fewer than 2 variants")
+    check_panels("robustness", robustness_figure(table), 1)
+    finish("robustness table and figure complete")
 
 for stem in ["arbitration", "case_study", "simulated/objective", "simulated/likert"]:
     for ext in ("pdf", "png"):
@@ -62,7 +82,4 @@ if replayed:
     first = read(simulated / "replay" / f"{replayed[0]}.replay.csv")
     check_panels(f"replay {replayed[0]}", replay_figure(first), 3)
 
-for problem in problems:
-    print(f"check_figures: {problem}", file=sys.stderr)
-print(f"check_figures: {'FAILED' if problems else 'all figures present and complete'}")
-sys.exit(1 if problems else 0)
+finish("all figures present and complete")

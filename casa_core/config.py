@@ -237,9 +237,10 @@ def _describe(error: jsonschema.ValidationError) -> Iterator[str]:
         for name in (name for name in error.validator_value if name not in value):
             yield f"{prefix}{name}: missing (required)"
     elif rule == "type":
-        kind = {"object": "a mapping", "array": "a list", "integer": "an integer"}.get(
-            error.validator_value, f"a {error.validator_value}"
-        )
+        names = {"object": "a mapping", "array": "a list", "integer": "an integer", "null": "null"}
+        kinds = error.validator_value
+        kinds = kinds if isinstance(kinds, list) else [kinds]  # a type list: any of them
+        kind = " or ".join(names.get(k, f"a {k}") for k in kinds)
         yield f"{key}: must be {kind}, got {value!r}"
     elif rule == "enum":
         choices = ", ".join(map(str, error.validator_value))
@@ -257,13 +258,16 @@ _BOUNDS = {"minimum": ">=", "maximum": "<=", "exclusiveMinimum": ">", "exclusive
 
 def _consistency(config: dict) -> list[str]:
     """Rules across keys that the schema cannot state."""
+    from casa_core.variants import variant_problems
+
     keys = config["simulation"]["population"]["max_keys"]
     where = "simulation.population.max_keys.p"
     if len(keys["p"]) != len(keys["values"]):
         return [f"{where}: must have as many entries as values ({len(keys['values'])})"]
     if abs(sum(keys["p"]) - 1) > 1e-8:
         return [f"{where}: must sum to 1, got {sum(keys['p'])!r}"]
-    return []
+    # Each modelling variant's overlay, checked against this schema (casa_core/variants.py).
+    return variant_problems(config)
 
 
 def _raise(source: str, problems: list[str]) -> None:

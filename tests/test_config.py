@@ -36,11 +36,26 @@ def _objects(node: dict, key: str = ""):
             yield from _objects(sub, f"{key}.{name}" if key else name)
 
 
+def _keys(node) -> set[str]:
+    """Every key of a nested mapping, at any depth."""
+    if not isinstance(node, dict):
+        return set()
+    return set(node).union(*(_keys(value) for value in node.values()))
+
+
 def test_the_schema_closes_every_level_and_every_key_is_required_or_defaulted():
     objects = dict(_objects(schema()))
     assert {"", "simulation", "simulation.population", "case_study"} <= set(objects)
     assert "simulation.population.max_keys" in objects
     for key, node in objects.items():
+        if key == "robustness.variants":
+            # A mapping of variant names; each value an overlay, closed at every level and
+            # without defaults (a default would override the study's own setting).
+            overlay = node["additionalProperties"]
+            assert overlay["additionalProperties"] is False
+            assert overlay["properties"]["simulation"]["additionalProperties"] is False
+            assert "default" not in _keys(overlay), overlay
+            continue
         assert node["additionalProperties"] is False, key
         assert "required" in node, key
         for name, sub in node["properties"].items():
@@ -71,9 +86,17 @@ def test_the_study_config_is_complete_and_ci_only_overlays_it():
     assert study == load_config(DEFAULT_CONFIG)
     ci = load_config(CONFIG, CI)
     assert ci["simulation"]["participants"] == 3
+    # The robustness target in CI: 2 participants under the default and original variants.
+    assert ci["robustness"]["participants"] == 2
+    assert ci["robustness"]["run"] == ["default", "original"]
+    assert ci["robustness"]["variants"] == study["robustness"]["variants"]
     ci["simulation"]["participants"] = study["simulation"]["participants"]
+    ci["robustness"] = study["robustness"]
     assert ci == study
-    assert yaml.safe_load(CI.read_text()) == {"simulation": {"participants": 3}}
+    assert yaml.safe_load(CI.read_text()) == {
+        "simulation": {"participants": 3},
+        "robustness": {"participants": 2, "run": ["default", "original"]},
+    }
 
 
 def test_defaults_are_filled_in_from_the_schema():

@@ -175,6 +175,34 @@ def test_noninferiority_bound_from_r_two_sided_interval(sleep):
     assert row["bound"] == pytest.approx(-1.58 + stats.t.ppf(0.95, 18) * se, abs=1e-5)
 
 
+def test_noninferiority_welch_matches_r(sleep):
+    # R: t.test(extra ~ group, data = sleep) (Welch, R's default): t = -1.8608,
+    # df = 17.776, 95 % CI [-3.3654832, 0.2054832] (R ?t.test on sleep). SE from the
+    # interval's half-width; the one-sided 95 % bound is d + t(0.95, df) SE.
+    row = non_inferiority(sleep, "extra", "group", "1", "2", welch=True).iloc[0]
+    assert row["df"] == pytest.approx(17.776, abs=5e-4)
+    se = (0.2054832 + 3.3654832) / 2 / stats.t.ppf(0.975, row["df"])
+    assert row["se"] == pytest.approx(se, abs=1e-6)
+    assert row["estimate"] / row["se"] == pytest.approx(-1.8608, abs=5e-5)
+    assert row["bound"] == pytest.approx(-1.58 + stats.t.ppf(0.95, row["df"]) * se, abs=1e-6)
+    with pytest.raises(ValueError, match="welch applies to independent samples"):
+        non_inferiority(sleep, "extra", "group", "1", "2", subject="ID", welch=True)
+
+
+def test_noninferiority_welch_against_a_constant_is_a_one_sample_test(sleep):
+    # A reference identically 1 (relative effort under NA): Welch's t reduces to the
+    # one-sample t of the new group against 1, df = n_new - 1; the pooled test claims
+    # n_new + n_reference - 2.
+    new = sleep[sleep["group"] == "1"]
+    data = pd.concat([new, new.assign(group="2", extra=1.0)])
+    welch = non_inferiority(data, "extra", "group", "1", "2", welch=True, margin=2.0).iloc[0]
+    pooled = non_inferiority(data, "extra", "group", "1", "2", margin=2.0).iloc[0]
+    one = stats.ttest_1samp(new["extra"] - 1.0 - 2.0, 0.0, alternative="less")
+    assert (welch["df"], pooled["df"]) == (9, 18)
+    assert welch["p"] == pytest.approx(one.pvalue, rel=1e-10)
+    assert "one-sample" in welch["note"]
+
+
 def test_noninferiority_paired_matches_r(sleep):
     # R: t.test(extra[group == 1], extra[group == 2], paired = TRUE): t = -4.0621, df = 9,
     # 95 % CI [-2.4598858, -0.7001142] (R ?sleep); one-sided bound from the same SE.

@@ -148,11 +148,32 @@ def test_paper_degrees_of_freedom_with_11_participants(table):
         per_task = _rows(table, hypothesis="H2", analysis="anova", metric=metric)
         assert set(per_task["task"]) == {"unknown_goal", "unknown_skill"}
         assert (per_task["df2"] == 30).all()
-        # Repeated-measures versions: (k - 1, (k - 1)(n - 1)) with n = 11 participants.
+        # Repeated-measures versions: (k - 1, (k - 1)(n - 1)) with n = 11 participants, times
+        # the Greenhouse-Geisser epsilon (below 1 with three conditions: the rows report the
+        # corrected test).
         rm1 = _rows(table, hypothesis="H1", analysis="rm_anova", metric=metric).iloc[0]
-        assert (rm1["df1"], rm1["df2"]) == (2, 20)
         rm2 = _rows(table, hypothesis="H2", analysis="rm_anova", metric=metric, term="method")
-        assert (rm2.iloc[0]["df1"], rm2.iloc[0]["df2"]) == (2, 20)
+        for row in (rm1, rm2.iloc[0]):
+            assert 0.5 <= row["epsilon"] < 1  # 1 / (k - 1) <= epsilon <= 1
+            assert row["df1"] == pytest.approx(2 * row["epsilon"], rel=1e-12)
+            assert row["df2"] == pytest.approx(20 * row["epsilon"], rel=1e-12)
+
+
+def test_rm_anova_rows_report_the_greenhouse_geisser_p(trials, table):
+    # The row's p is rm_anova's p_gg where epsilon < 1; the uncorrected p and Mauchly's
+    # test are kept in their own columns.
+    from casa_core.stats import rm_anova
+
+    known = trials[trials["task"] == "known_goal"]
+    direct = rm_anova(known, "error", "method", "participant").iloc[0]
+    row = _rows(table, hypothesis="H1", analysis="rm_anova", metric="error").iloc[0]
+    assert direct["eps"] < 1
+    assert row["p"] == pytest.approx(direct["p_gg"], rel=1e-12)
+    assert row["p_uncorrected"] == pytest.approx(direct["p"], rel=1e-12)
+    assert row["p"] >= row["p_uncorrected"]  # the correction only widens the F distribution
+    assert row["sphericity_W"] == pytest.approx(direct["W_spher"], rel=1e-12)
+    assert row["sphericity_p"] == pytest.approx(direct["p_spher"], rel=1e-12)
+    assert "Greenhouse-Geisser corrected" in row["note"]
 
 
 def test_every_hypothesis_has_both_forms(table):
@@ -170,13 +191,14 @@ def test_every_hypothesis_has_both_forms(table):
         h1 = _rows(table, hypothesis="H1", metric=metric)
         assert set(h1["comparison"]) >= {"CASA vs NA", "CASA vs PBA"}
         noninf = _rows(h1, analysis="noninferiority")
-        assert len(noninf) == 2 and set(noninf["comparison"]) == {"CASA vs PBA"}
+        # Independent (paper: pooled variance), independent with Welch's t, paired.
+        assert len(noninf) == 3 and set(noninf["comparison"]) == {"CASA vs PBA"}
         for task in ("unknown_goal", "unknown_skill"):
             rows = _rows(
                 table, hypothesis="H2", task=task, metric=metric, analysis="noninferiority"
             )
             assert set(rows["comparison"]) == {"CASA before learning vs NA"}
-            assert len(rows) == 2  # independent (paper) and paired
+            assert len(rows) == 3  # independent (paper), Welch and paired
         tukey = _rows(table, hypothesis="H2", task="unknown_goal+unknown_skill", metric=metric)
         assert "CASA before learning vs PBA" in set(tukey["comparison"])
 
@@ -201,8 +223,12 @@ def test_paper_rows_equal_direct_calls(trials, table):
 
 def test_noninferiority_rows(table):
     rows = _rows(table, hypothesis="H1", analysis="noninferiority", metric="error")
-    paper = rows[rows["note"].str.contains("independent")].iloc[0]
+    paper = rows[rows["note"].str.contains("as the paper")].iloc[0]
+    welch = rows[rows["note"].str.contains("Welch")].iloc[0]
     paired = rows[rows["note"].str.contains("paired")].iloc[0]
+    # stats.claims takes the first row without "paired" as the paper's: the pooled one.
+    assert rows[~rows["note"].str.contains("paired")].index[0] == paper.name
+    assert welch["estimate"] == paper["estimate"] and 10 <= welch["df1"] <= 20
     # ci_high is the one-sided bound; the verdict at margin 1.0 agrees with it.
     assert paper["ci_high"] > paper["estimate"] and np.isnan(paper["ci_low"])
     assert bool(paper["noninferior"]) == (paper["ci_high"] < 1.0)
@@ -368,7 +394,11 @@ def test_cli_writes_both_outputs(tmp_path, trials, likert, capsys):
     assert list(written.columns) == STATS_COLUMNS
     assert set(written["hypothesis"]) == {"H1", "H2", "H3", "H4"}
     assert "F(2, 30)" in out_md.read_text(encoding="utf-8")
-    assert report_markdown(written) == out_md.read_text(encoding="utf-8")  # CSV round trip
+    # CSV round trip: the report is the table's, opened by the trials' description.
+    read_trials = pd.read_csv(tmp_path / "trials.csv", keep_default_na=False, na_values=[""])
+    report = out_md.read_text(encoding="utf-8")
+    assert report_markdown(written, trials=read_trials) == report
+    assert "The data are simulated (source: simulated): 11 simulated participants." in report
     assert sorted(p.name for p in out_csv.parent.iterdir()) == ["stats.csv", "stats.md"]
 
 

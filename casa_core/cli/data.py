@@ -139,22 +139,50 @@ def _add_stats(commands) -> None:
     command.add_argument("--likert", metavar="CSV", help="likert.csv (optional)")
     command.add_argument("--out-csv", required=True, metavar="CSV", help="stats.csv to write")
     command.add_argument("--out-md", required=True, metavar="MD", help="report to write")
+    command.add_argument(
+        "--margin",
+        action="append",
+        default=[],
+        metavar="[TASK:]METRIC=VALUE",
+        help="a non-inferiority margin in the metric's unit (repeatable; the workflow "
+        "passes the config's statistics.noninferiority_margins)",
+    )
+    command.add_argument(
+        "--margin-fraction",
+        action="append",
+        default=[],
+        metavar="[TASK:]METRIC=VALUE",
+        help="a margin as a fraction of the reference condition's mean (repeatable; "
+        "statistics.noninferiority_fractions)",
+    )
     command.set_defaults(func=_stats)
 
 
 def _stats(args) -> int:
     from casa_core import datasets, stats
     from casa_core.io.atomic import atomic_paths, frame_to_csv_text
+    from casa_core.stats.margins import Margins, parse_margin
 
+    try:
+        margins = Margins(
+            absolute=dict(parse_margin(text, "--margin") for text in args.margin),
+            fractions=dict(
+                parse_margin(text, "--margin-fraction") for text in args.margin_fraction
+            ),
+        )
+    except ValueError as error:
+        print(f"casa stats: {error}", file=sys.stderr)
+        return 2
     try:
         # read_table keeps the method "NA" as text (pandas' default would make it missing).
         trials = datasets.read_table(args.trials)
         likert = datasets.read_table(args.likert) if args.likert else None
-        table = stats.analyze_study(trials, likert)
+        table = stats.analyze_study(trials, likert, margins=margins)
+        report = stats.report_markdown(table, trials=trials)
     except (OSError, ValueError) as error:
         print(f"casa stats: {error}", file=sys.stderr)
         return 1
-    texts = (frame_to_csv_text(table), stats.report_markdown(table))
+    texts = (frame_to_csv_text(table), report)
     try:
         # The table and its report belong together: both or neither are replaced.
         with atomic_paths(args.out_csv, args.out_md) as temporaries:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from casa_core.cli._options import example, positive_float
-from casa_core.defaults import EPSILON
+from casa_core.cli import robustness
+from casa_core.cli._options import example
 
 #: One example per page, shown by each command's --help.
 _EXAMPLES = {
@@ -55,21 +55,10 @@ def register(commands) -> None:
         help="each claim of the paper with its criterion, the numbers and a verdict",
         **_example("results"),
     )
-    for name, what in (("trials", "trials.csv"), ("steps", "steps.csv"), ("stats", "stats.csv")):
-        results.add_argument(f"--{name}", required=True, metavar="CSV", help=what)
-    results.add_argument("--likert", metavar="CSV", help="likert.csv (optional)")
-    results.add_argument(
-        "--arbitration", metavar="CSV", help="the case study's arbitration.csv (optional)"
-    )
-    results.add_argument(
-        "--case-steps", metavar="CSV", help="the case study's steps.csv (optional)"
-    )
+    robustness.add_claim_options(results)
     results.add_argument("--dataset", required=True, help="the dataset's name, for the title")
     results.add_argument(
-        "--epsilon",
-        type=positive_float,
-        default=EPSILON,
-        help=f"the misspecification threshold on beta_hat (default {EPSILON:g})",
+        "--operator", help="the simulated operator model, named for a simulated dataset"
     )
     results.add_argument("--out", required=True, metavar="MD", help="results.md to write")
     results.add_argument("--out-html", metavar="HTML", help="its HTML page (optional)")
@@ -91,6 +80,8 @@ def register(commands) -> None:
     table.add_argument("--out", required=True, metavar="HTML")
     table.add_argument("--title", help="the heading (default: the file's name)")
     table.set_defaults(func=_table)
+    # The claims under each modelling variant (casa_core/cli/robustness.py).
+    robustness.register_pages(pages)
 
 
 def _fail(error: Exception) -> int:
@@ -117,19 +108,15 @@ def _summary(args) -> int:
 
 
 def _results(args) -> int:
-    from casa_core import datasets, report_pages
+    from casa_core import report_pages
     from casa_core.io.atomic import atomic_write_text
     from casa_core.stats.claims import evaluate_claims
     from casa_core.stats.results import results_markdown
 
-    names = ("trials", "steps", "stats", "likert", "arbitration", "case_steps")
     try:
-        tables = {
-            name: datasets.read_table(getattr(args, name)) if getattr(args, name) else None
-            for name in names
-        }
+        tables = robustness.read_claim_tables(args)
         claims = evaluate_claims(tables, epsilon=args.epsilon)
-        text = results_markdown(claims, tables, dataset=args.dataset)
+        text = results_markdown(claims, tables, dataset=args.dataset, operator=args.operator)
     except (OSError, ValueError) as error:
         return _fail(error)
     atomic_write_text(args.out, text)

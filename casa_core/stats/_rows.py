@@ -24,8 +24,14 @@ STATS_COLUMNS = [
     "margin",
     "noninferior",
     "n",
+    "p_uncorrected",
+    "epsilon",
+    "sphericity_W",
+    "sphericity_p",
     "note",
 ]
+#: Epsilon below 1 by more than rounding: the Greenhouse-Geisser correction applies.
+_EPSILON_ONE = 1.0 - 1e-9
 
 
 class Rows:
@@ -59,6 +65,37 @@ class Rows:
                 note=note,
             )
 
+    def repeated(self, key: dict, table: pd.DataFrame) -> None:
+        """rm_anova rows: where epsilon < 1, ``p`` and the dfs are Greenhouse-Geisser's.
+
+        The uncorrected p stays in ``p_uncorrected``; ``epsilon`` and Mauchly's test of
+        sphericity (``sphericity_W``, ``sphericity_p``) are reported for every term.
+        """
+        for _, line in table.iterrows():
+            eps = float(line["eps"])
+            corrected = np.isfinite(eps) and eps < _EPSILON_ONE and np.isfinite(line["p_gg"])
+            scale = eps if corrected else 1.0
+            note = line["note"]
+            if corrected:
+                gg = (
+                    f"Greenhouse-Geisser corrected: epsilon = {eps:.3f}, df x epsilon, "
+                    f"uncorrected p = {line['p']:.4g}"
+                )
+                note = "; ".join(x for x in (gg, note) if x)
+            self.take(
+                key,
+                line,
+                {"statistic": "F", "effect_size": "ng2", "n": "n", "p_uncorrected": "p"},
+                term=str(line["term"]),
+                df1=line["df1"] * scale,
+                df2=line["df2"] * scale,
+                p=line["p_gg"] if corrected else line["p"],
+                epsilon=eps,
+                sphericity_W=line["W_spher"],
+                sphericity_p=line["p_spher"],
+                note=note,
+            )
+
     def tukey(self, key: dict, table: pd.DataFrame) -> None:
         fields = {"p": "p", "estimate": "diff", "ci_low": "ci_low", "ci_high": "ci_high"}
         for _, line in table.iterrows():
@@ -69,11 +106,23 @@ class Rows:
                 term="method",
                 comparison="" if pd.isna(line["A"]) else versus(line["A"], line["B"]),
                 n=line["n_A"] + line["n_B"],
+                # Model-based contrasts carry their t and residual df.
+                statistic=line.get("t", np.nan),
+                df1=line.get("df", np.nan),
             )
 
-    def noninferiority(self, key: dict, table: pd.DataFrame, paired: bool) -> None:
+    def noninferiority(
+        self, key: dict, table: pd.DataFrame, paired: bool, welch: bool = False, extra: str = ""
+    ) -> None:
         line = table.iloc[0]
-        design = "paired by participant" if paired else "independent samples, as the paper"
+        # The word "paired" marks the within-subjects row only (stats.claims reads it).
+        design = (
+            "paired by participant"
+            if paired
+            else "independent samples, Welch's unequal variances"
+            if welch
+            else "independent samples, as the paper"
+        )
         verdict = line["noninferior"]
         fields = {"statistic": "t", "df1": "df", "p": "p", "estimate": "estimate"}
         self.take(
@@ -84,7 +133,7 @@ class Rows:
             comparison=versus(line["new"], line["reference"]),
             noninferior=verdict if not pd.isna(verdict) else pd.NA,
             n=line["n_new"] + (0 if paired else line["n_reference"]),
-            note="; ".join(x for x in (line["note"], design) if x),
+            note="; ".join(x for x in (line["note"], design, extra) if x),
         )
 
     def friedman(self, key: dict, line: pd.Series) -> None:
@@ -93,12 +142,15 @@ class Rows:
 
     def wilcoxon(self, key: dict, table: pd.DataFrame) -> None:
         """One row per comparison; the note gives the Holm family and the unadjusted p."""
-        family = int(table["p_unc"].notna().sum())
+        family, skipped = len(table), int(table["p_unc"].isna().sum())
         fields = {"statistic": "V", "p": "p", "effect_size": "rbc", "estimate": "median_diff"}
         for _, line in table.iterrows():
             note = line["note"]
             if np.isfinite(line["p_unc"]):
-                note = f"p Holm-adjusted over {family}; unadjusted p = {line['p_unc']:.4g}"
+                note = f"p Holm-adjusted over {family}"
+                if skipped:
+                    note += f" ({skipped} skipped, counted in the family)"
+                note += f"; unadjusted p = {line['p_unc']:.4g}"
                 note = "; ".join(x for x in (note, line["note"]) if x)
             self.take(
                 key,

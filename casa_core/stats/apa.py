@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from casa_core.stats.descriptives import data_lines
 from casa_core.stats.study import MODEL_OUTPUT_NOTE, STATS_COLUMNS
 from casa_core.tables import require_columns
 
@@ -29,17 +30,21 @@ ANALYSIS_NAMES = {
     "tukey": "Tukey HSD",
     "noninferiority": "non-inferiority",
     "rm_anova": "repeated-measures ANOVA",
-    "mixedlm": "mixed model (participant intercept)",
+    "mixedlm": "mixed model (participant intercept, LR test)",
     "friedman": "Friedman",
     "wilcoxon": "Wilcoxon signed-rank",
 }
 _INTRODUCTION = (
-    "Paper form: each participant-condition an independent observation (ANOVA, ANCOVA, "
-    "Tukey HSD, independent non-inferiority). Within-subjects form: repeated-measures "
-    "ANOVA, a mixed model with a participant random intercept (Wald χ²) and paired "
-    "non-inferiority. Non-inferiority reports the one-sided 95% upper bound of "
-    "mean(CASA) - mean(reference), the smallest margin at which CASA is non-inferior "
-    "(lower is better for every metric)."
+    "Paper form: each participant-condition an independent observation (ANOVA, ANCOVA "
+    "with the method x task interaction beside it, Tukey HSD -- from the ANCOVA model "
+    "where tasks are pooled -- and independent non-inferiority, pooled and Welch). "
+    "Within-subjects form: repeated-measures ANOVA (Greenhouse-Geisser corrected where "
+    "epsilon < 1, Mauchly's test in stats.csv), a mixed model with a participant random "
+    "intercept (likelihood-ratio χ², ML fits) and paired non-inferiority; effort also as "
+    "log(effort + 1) with participant effects (log_effort). Non-inferiority reports the "
+    "one-sided 95% upper bound of mean(CASA) - mean(reference), the smallest margin at "
+    "which CASA is non-inferior (lower is better for every metric), and the test at the "
+    "configured margin."
 )
 
 
@@ -196,7 +201,7 @@ def result(row: pd.Series) -> str:
     return ""
 
 
-def report_markdown(table: pd.DataFrame) -> str:
+def report_markdown(table: pd.DataFrame, *, trials: pd.DataFrame | None = None) -> str:
     """An APA-style Markdown report of the stats table from :func:`analyze_study`.
 
     One section per hypothesis (:data:`TITLES`), one table row per test, e.g.
@@ -206,6 +211,10 @@ def report_markdown(table: pd.DataFrame) -> str:
     ----------
     table : pandas.DataFrame
         The output of :func:`casa_core.stats.analyze_study` (or stats.csv read back).
+    trials : pandas.DataFrame, optional
+        The trials table the statistics were computed from: the report then opens with
+        the data's source, the number of participants and the mean ± SD of every metric
+        per task and condition (:func:`casa_core.stats.descriptives.data_lines`).
 
     Returns
     -------
@@ -229,7 +238,10 @@ def report_markdown(table: pd.DataFrame) -> str:
     require_columns(table, STATS_COLUMNS, "stats table")
     # stats.csv read back with pandas turns empty text into NaN.
     table = table.fillna({"note": "", "comparison": "", "term": ""})
-    lines = ["# CASA user study: statistics", "", _INTRODUCTION]
+    lines = ["# CASA user study: statistics", ""]
+    if trials is not None:
+        lines += data_lines(trials)
+    lines.append(_INTRODUCTION)
     for hypothesis, title in TITLES.items():
         part = table[table["hypothesis"] == hypothesis]
         if part.empty:
@@ -246,6 +258,8 @@ def report_markdown(table: pd.DataFrame) -> str:
             term = row["comparison"] or row["term"]
             if row["analysis"] == "noninferiority" and "paired" in str(row["note"]):
                 term += " (paired)"
+            elif row["analysis"] == "noninferiority" and "Welch" in str(row["note"]):
+                term += " (Welch)"
             cells = [
                 row["task"],
                 row["metric"],

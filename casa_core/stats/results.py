@@ -73,8 +73,44 @@ def _cell(text) -> str:
     return str(text).replace("|", "/")
 
 
+#: Where the claims are judged under other modelling choices, and the command that builds it.
+ROBUSTNESS_NOTE = (
+    "data/processed/robustness/results.md, built by `snakemake --cores all robustness` "
+    "(not by the default target), judges the same claims on the simulated study under the "
+    "other modelling choices the paper leaves open (inference preset, evidence, operator "
+    "model), with the same participants and seeds."
+)
+
+
+def modelling_note(trials: pd.DataFrame, *, operator: str | None = None) -> str:
+    """For a simulated dataset: its modelling choices and where the other choices are judged.
+
+    Examples
+    --------
+    >>> trials = pd.DataFrame({"source": ["simulated"], "preset": ["casa"],
+    ...                        "evidence": ["commanded"]})
+    >>> print(modelling_note(trials, operator="lookahead").split(". ")[0].split(": ")[1])
+    preset casa, evidence commanded, operator model lookahead
+    >>> modelling_note(trials.assign(source="human"))
+    ''
+    """
+    if "simulated" not in _values(trials, "source"):
+        return ""
+    choices = [
+        f"preset {', '.join(_values(trials, 'preset')) or 'not recorded'}",
+        f"evidence {', '.join(_values(trials, 'evidence')) or 'not recorded'}",
+    ]
+    if operator:
+        choices.append(f"operator model {operator}")
+    return f"Modelling choices (the config's defaults): {', '.join(choices)}. {ROBUSTNESS_NOTE}"
+
+
 def results_markdown(
-    claims: pd.DataFrame, tables: Mapping[str, pd.DataFrame | None], *, dataset: str
+    claims: pd.DataFrame,
+    tables: Mapping[str, pd.DataFrame | None],
+    *,
+    dataset: str,
+    operator: str | None = None,
 ) -> str:
     """The Markdown of ``results.md`` from :func:`casa_core.stats.claims.evaluate_claims`.
 
@@ -87,6 +123,9 @@ def results_markdown(
         opening sentences (:func:`facts`).
     dataset : str
         The dataset's name, for the title.
+    operator : str, optional
+        The simulated operator model (``simulation.operator``), named for a simulated
+        dataset beside a pointer to the robustness table (:func:`modelling_note`).
 
     Returns
     -------
@@ -115,6 +154,8 @@ def results_markdown(
     require_columns(claims, CLAIM_COLUMNS, "claims table")
     lines = [f"# Claims of the paper on dataset {dataset}", ""]
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
+    note = modelling_note(tables["trials"], operator=operator)
+    lines += [note, ""] if note else []
     lines += [
         "Each claim of the paper (C1-C4: what it observed in its expert case study, Sec. "
         "IV, judged on this dataset's trials and, as \"expert\", on the case study's; "

@@ -19,8 +19,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from casa_core.stats import between, within
+from casa_core.stats import between, posthoc, within
 from casa_core.stats._rows import STATS_COLUMNS, Rows
+from casa_core.stats.margins import Margins
 from casa_core.tables import numeric_column, require_columns
 from casa_core.vocabulary import (
     ANSWERED_BY,
@@ -35,6 +36,15 @@ from casa_core.vocabulary import (
 )
 
 METRICS = ["error", "efficiency", "relative_effort", "effort"]
+#: Effort on a log scale, log(effort + 1) per trial, analysed with participant effects
+#: only (rm_anova, mixedlm): the participant's own scale, without NA's constant 1.
+LOG_EFFORT = "log_effort"
+#: On the relative-effort rows that compare with NA (NA's is 1 by construction).
+ONE_SAMPLE_NOTE = (
+    "relative effort is 1 under NA by construction (effort over NA's), so NA has no "
+    "variance and a comparison with NA is a one-sample test of the other condition in "
+    "disguise (unequal variances: Levene's test rejects); see the log_effort rows"
+)
 #: The analyses over both misspecified tasks name their task so.
 POOLED = "+".join(UNKNOWN_TASKS)
 #: Level order: the CASA family first, so Tukey pairs and comparisons read "CASA vs NA".
@@ -117,14 +127,19 @@ def _subset(cells: pd.DataFrame, tasks: list[str], conditions: list[str]) -> pd.
     return chosen
 
 
-def _gg_note(line) -> str:
-    return f"Greenhouse-Geisser p = {line['p_gg']:.4g}" if np.isfinite(line["p_gg"]) else ""
-
-
-def _margin_for(margins: Mapping[str, float] | None, task: str, metric: str) -> float | None:
-    if not margins:
-        return None
-    return margins.get(f"{task}:{metric}", margins.get(metric))
+def _margin(margins: Margins | None, data, task: str, metric: str, reference: str):
+    """The margin for ``task`` and ``metric`` and how it was set (for the note)."""
+    if margins is None:
+        return None, ""
+    absolute = margins.absolute_for(task, metric)
+    if absolute is not None:
+        return absolute, ""
+    fraction = margins.fraction_for(task, metric)
+    cells = data.loc[data["method"] == reference, metric]
+    if fraction is None or cells.empty or not np.isfinite(cells.mean()) or cells.mean() <= 0:
+        return None, ""
+    margin = fraction * float(cells.mean())
+    return margin, f"margin {fraction:g} x mean({reference}) = {margin:.4g}"
 
 
 def _objective(
@@ -134,6 +149,10 @@ def _objective(
     key = {"hypothesis": hyp, "task": task_label, "metric": metric}
     first = len(out.rows)
     _objective_rows(out, key, metric, data, conditions, covariate, margins, noninf)
+    if metric == "relative_effort" and _constant(data, "NA", metric):
+        for row in out.rows[first:]:
+            if row["analysis"] != "noninferiority":  # non_inferiority says so itself
+                row["note"] = "; ".join(x for x in (row["note"], ONE_SAMPLE_NOTE) if x)
     # Say plainly what is missing: an absent task or condition explains skipped tests.
     absent = [c for c in conditions if not (data["method"] == c).any()]
     if data.empty:
@@ -146,34 +165,36 @@ def _objective(
         row["note"] = "; ".join(x for x in (remark, row["note"]) if x)
 
 
+def _constant(data: pd.DataFrame, condition: str, metric: str) -> bool:
+    values = data.loc[data["method"] == condition, metric].to_numpy(dtype=float)
+    return len(values) > 1 and float(np.ptp(values)) == 0.0
+
+
 def _objective_rows(out, key, metric, data, conditions, covariate, margins, noninf) -> None:
     task_label = key["task"]
+    if metric == LOG_EFFORT:
+        _within_rows(out, key, metric, data, covariate)
+        return
     if covariate:
-        out.terms(
-            key | {"analysis": "ancova"}, between.ancova(data, metric, "method", "task"), "F", "np2"
-        )
+        ancova = key | {"analysis": "ancova"}
+        out.terms(ancova, between.ancova(data, metric, "method", "task"), "F", "np2")
+        out.terms(ancova, posthoc.interaction(data, metric, "method", "task"), "F", "np2")
     else:
         out.terms(key | {"analysis": "anova"}, between.anova(data, metric, "method"), "F", "np2")
     if len(conditions) > 2:
-        out.tukey(key | {"analysis": "tukey"}, between.tukey_hsd(data, metric, "method"))
-    factors = ["method", "task"] if covariate else "method"
-    out.terms(
-        key | {"analysis": "rm_anova"},
-        within.rm_anova(data, metric, factors, "participant"),
-        "F",
-        "ng2",
-        _gg_note,
-    )
-    out.terms(
-        key | {"analysis": "mixedlm"},
-        within.mixedlm(data, metric, factors, "participant"),
-        "chi2",
-        "none",
-    )
+        # Pooled tasks: the pairs come from the ANCOVA model, whose residual excludes task.
+        pairs = (
+            posthoc.model_contrasts(data, metric, "method", "task")
+            if covariate
+            else between.tukey_hsd(data, metric, "method")
+        )
+        out.tukey(key | {"analysis": "tukey"}, pairs)
+    _within_rows(out, key, metric, data, covariate)
     if noninf is not None:
         new, reference = noninf
-        margin = _margin_for(margins, task_label, metric)
-        for paired in (False, True):
+        margin, why = _margin(margins, data, task_label, metric, reference)
+        # The paper's pooled test first: stats.claims reads the first independent row.
+        for paired, welch in ((False, False), (False, True), (True, False)):
             table = between.non_inferiority(
                 data,
                 metric,
@@ -184,15 +205,30 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
                 alpha=ALPHA,
                 margin=margin,
                 subject="participant" if paired else None,
+                welch=welch,
             )
-            out.noninferiority(key | {"analysis": "noninferiority"}, table, paired)
+            out.noninferiority(key | {"analysis": "noninferiority"}, table, paired, welch, why)
+
+
+def _within_rows(out, key, metric, data, covariate) -> None:
+    """The within-subjects tests: repeated-measures ANOVA and the mixed model."""
+    factors = ["method", "task"] if covariate else "method"
+    out.repeated(
+        key | {"analysis": "rm_anova"}, within.rm_anova(data, metric, factors, "participant")
+    )
+    out.terms(
+        key | {"analysis": "mixedlm"},
+        within.mixedlm(data, metric, factors, "participant"),
+        "chi2",
+        "none",
+    )
 
 
 def analyze_study(
     trials: pd.DataFrame,
     likert: pd.DataFrame | None = None,
     *,
-    margins: Mapping[str, float] | None = None,
+    margins: Margins | Mapping[str, float] | None = None,
     metrics: Sequence[str] = tuple(METRICS),
 ) -> pd.DataFrame:
     """Every analysis of hypotheses H1-H4, in the paper's form and the within-subjects form.
@@ -204,9 +240,11 @@ def analyze_study(
         metrics ``error, efficiency, relative_effort, effort``; all lower is better).
     likert : pandas.DataFrame, optional
         The processed Likert table (``participant, task, method, phase, question, score``).
-    margins : mapping, optional
-        Non-inferiority margins, keyed by ``"task:metric"`` or by ``metric``.  Without a
-        margin the non-inferiority rows report the bound only (the paper's numbers).
+    margins : Margins or mapping, optional
+        Non-inferiority margins (:class:`casa_core.stats.margins.Margins`, e.g. from the
+        config's ``statistics`` section); a plain mapping is taken as absolute margins
+        keyed by ``"task:metric"`` or by ``metric``.  Without a margin the
+        non-inferiority rows report the bound only (the paper's numbers).
     metrics : sequence of str
         The trials-table columns to analyse, by default all four (each must exist).
 
@@ -214,7 +252,8 @@ def analyze_study(
     -------
     pandas.DataFrame
         The stats.csv table, columns :data:`STATS_COLUMNS`.  ``statistic`` is F (anova,
-        ancova, rm_anova), the Wald chi-square (mixedlm), t at the margin (noninferiority),
+        ancova, rm_anova), the likelihood-ratio chi-square (mixedlm), t (tukey rows of the
+        pooled tasks, from the ANCOVA model), t at the margin (noninferiority),
         Friedman's chi-square (friedman) or V (wilcoxon); ``effect_size`` is partial eta
         squared (anova, ancova), generalized eta squared (rm_anova), Kendall's W (friedman)
         or the rank-biserial correlation (wilcoxon); on non-inferiority rows ``ci_high`` is
@@ -231,9 +270,13 @@ def analyze_study(
     -----
     H1, Known Goal: ANOVA over NA, PBA, CASA; Tukey; non-inferiority CASA vs PBA.
     H2, Unknown Goal and Skill: ANCOVA over CASA before learning, NA, PBA with task as
-    covariate; Tukey; per task ANOVA, Tukey and non-inferiority CASA before learning vs NA.
-    H3: ANCOVA NA vs CASA after learning with task as covariate; per task ANOVA.
-    Each with a repeated-measures ANOVA (method, or method x task) and a mixed model.
+    covariate, the method x task interaction, and Tukey-adjusted comparisons from the
+    ANCOVA model; per task ANOVA, Tukey and non-inferiority CASA before learning vs NA.
+    H3: ANCOVA NA vs CASA after learning with task as covariate and the interaction; per
+    task ANOVA. Each with a repeated-measures ANOVA (method, or method x task;
+    Greenhouse-Geisser corrected, Mauchly's test reported) and a mixed model
+    (likelihood-ratio tests, the interaction where tasks are pooled); effort also on a
+    log scale, ``log_effort``, with these two only.
     H4: per task and question, Friedman over the conditions and Wilcoxon signed-rank tests
     of CASA (after learning, for the misspecified tasks) against each other condition,
     Holm-corrected.
@@ -241,7 +284,9 @@ def analyze_study(
     Examples
     --------
     Four participants of the Known Goal task; the other hypotheses keep skipped rows.
-    The non-inferiority rows are the independent (paper) test, then the paired one.
+    The repeated-measures row is Greenhouse-Geisser corrected (df times epsilon); the
+    non-inferiority rows are the independent (paper, pooled variance) test, Welch's, then
+    the paired one.
 
     >>> errors = {"NA": [3.0, 3.4, 2.9, 3.7], "PBA": [2.1, 2.6, 2.4, 2.3],
     ...           "CASA": [1.2, 1.9, 1.4, 1.3]}
@@ -252,18 +297,21 @@ def analyze_study(
     >>> table = analyze_study(trials, metrics=["error"])
     >>> h1 = table[table["hypothesis"] == "H1"]
     >>> h1[["analysis", "comparison", "statistic", "df1", "df2", "estimate"]].round(2)
-             analysis   comparison  statistic  df1  df2  estimate
-    0           anova                   35.13  2.0  9.0       NaN
-    1           tukey   CASA vs NA        NaN  NaN  NaN      -1.8
-    2           tukey  CASA vs PBA        NaN  NaN  NaN      -0.9
-    3           tukey    NA vs PBA        NaN  NaN  NaN       0.9
-    4        rm_anova                   57.18  2.0  6.0       NaN
-    5         mixedlm                  114.35  2.0  NaN       NaN
-    6  noninferiority  CASA vs PBA        NaN  6.0  NaN      -0.9
-    7  noninferiority  CASA vs PBA        NaN  3.0  NaN      -0.9
+             analysis   comparison  statistic   df1   df2  estimate
+    0           anova                   35.13  2.00  9.00       NaN
+    1           tukey   CASA vs NA        NaN   NaN   NaN      -1.8
+    2           tukey  CASA vs PBA        NaN   NaN   NaN      -0.9
+    3           tukey    NA vs PBA        NaN   NaN   NaN       0.9
+    4        rm_anova                   57.18  1.16  3.49       NaN
+    5         mixedlm                   27.72  2.00   NaN       NaN
+    6  noninferiority  CASA vs PBA        NaN  6.00   NaN      -0.9
+    7  noninferiority  CASA vs PBA        NaN  5.24   NaN      -0.9
+    8  noninferiority  CASA vs PBA        NaN  3.00   NaN      -0.9
     >>> print(table[table["hypothesis"] == "H3"]["note"].iloc[0])  # doctest: +ELLIPSIS
     no trials of unknown_goal+unknown_skill in conditions CASA after learning, NA; ...
     """
+    if margins is not None and not isinstance(margins, Margins):
+        margins = Margins(absolute=dict(margins))
     cells_by_metric = _prepare_trials(trials, list(metrics))
     out = Rows()
     for metric, cells in cells_by_metric.items():
@@ -316,6 +364,11 @@ def _prepare_trials(trials: pd.DataFrame, metrics: list[str]) -> dict[str, pd.Da
     frame = _conditions(trials, "trials table")
     for metric in metrics:
         frame[metric] = numeric_column(frame, metric, "trials table")
+    if "effort" in metrics:
+        # Per trial, before averaging: a participant's cell mean of logs.
+        with np.errstate(invalid="ignore", divide="ignore"):
+            frame[LOG_EFFORT] = np.log1p(frame["effort"].where(frame["effort"] >= 0))
+        metrics = [*metrics, LOG_EFFORT]
     return {metric: _cell_means(frame, metric) for metric in metrics}
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import pandas as pd
 
 from casa_core.stats.apa import ANALYSIS_NAMES, TITLES, model_output_lines, result
-from casa_core.stats.study import POOLED, STATS_COLUMNS
+from casa_core.stats.study import LOG_EFFORT, POOLED, STATS_COLUMNS
 from casa_core.tables import require_columns
 from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
 
@@ -29,6 +29,7 @@ MEASURES = {
     "efficiency": "efficiency cost",
     "relative_effort": "effort relative to NA",
     "effort": "effort (key presses)",
+    LOG_EFFORT: "log(effort + 1), participant effects",
     **{question: f"Likert: {label}" for question, label in QUESTION_LABELS.items()},
 }
 SUMMARY_COLUMNS = ["hypothesis", "task", "measure", "paper", "within"]
@@ -103,7 +104,8 @@ def summary_table(stats: pd.DataFrame) -> pd.DataFrame:
                     "hypothesis": hypothesis,
                     "task": _task_label(task_name),
                     "measure": MEASURES.get(metric, metric),
-                    "paper": _test(group, paper),
+                    # log effort is analysed within subjects only.
+                    "paper": _test(group, None if metric == LOG_EFFORT else paper),
                     "within": _test(group, within),
                 }
             )

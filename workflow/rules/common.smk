@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from casa_core import config as casa_config
+from casa_core import variants as casa_variants
 from casa_core import vocabulary
 from casa_core.io.atomic import atomic_write_text
 
@@ -28,14 +29,15 @@ config.clear()
 config.update(casa_config.load_config(*config_layers(), overrides=workflow.config_settings.config))
 
 
-def effective_config_file(path=Path("data/interim/config.yaml")):
+def effective_config_file(path=Path("data/interim/config.yaml"), settings=None):
     """The validated config, --config overrides and schema defaults included, for the package.
 
     The package commands read a config file; this one is what the workflow itself
     sees, so that `--config KEY=VALUE` reaches them too. It is rewritten only when its
-    content changes, so that an unchanged config reruns nothing.
+    content changes, so that an unchanged config reruns nothing. `settings`: another
+    whole config to write instead (a robustness variant's).
     """
-    text = casa_config.config_text(config)
+    text = casa_config.config_text(config if settings is None else settings)
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
         atomic_write_text(path, text)
     return str(path)
@@ -55,7 +57,7 @@ FIGURES = Path("figures")
 # Dataset names become folder and file names: keep them portable.
 DATASET_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 # Outputs of the dataset-independent rules live here; no dataset may take the name.
-RESERVED = ("case_study",)
+RESERVED = ("case_study", "robustness")
 # The tasks whose intents the simulated participants teach (workflow/rules/study.smk).
 UNKNOWN_TASKS = vocabulary.UNKNOWN_TASKS
 # Datasets that rules of this workflow write into data/raw (the simulated study).
@@ -183,6 +185,13 @@ def case_study_options(wildcards, input):
     return " ".join(f"{flag} {path}" for flag, path in paths.items() if path)
 
 
+def operator_option(wildcards):
+    """The operator model of a generated dataset, named in its results.md."""
+    if wildcards.ds not in GENERATED:
+        return ""
+    return f"--operator {config['simulation']['operator']}"
+
+
 def stats_input(wildcards):
     """The tables of the statistics; statistics left beside missing tables are removed.
 
@@ -199,3 +208,33 @@ def stats_input(wildcards):
             elif stale.exists():
                 stale.unlink()
     return tables
+
+
+# The robustness target's modelling variants (workflow/rules/robustness.smk;
+# casa_core/variants.py): each variant's whole config, written as the study's is.
+VARIANTS = casa_variants.variant_names(config)
+ROBUST_INTERIM = Path("data/interim/robustness")
+ROBUST = PROCESSED / "robustness"
+ROBUST_PARTICIPANTS = list(range(1, config["robustness"]["participants"] + 1))
+VARIANT_CONFIGS = {
+    name: effective_config_file(
+        ROBUST_INTERIM / name / "config.yaml", casa_variants.variant_config(config, name)
+    )
+    for name in VARIANTS
+}
+
+
+wildcard_constraints:
+    variant="|".join(re.escape(v) for v in VARIANTS) or "(?!)",
+
+
+def variant_config_input(wildcards):
+    """The config of a robustness variant's job."""
+    return VARIANT_CONFIGS[wildcards.variant]
+
+
+def margin_options(wildcards=None):
+    """The config's non-inferiority margins (statistics) as casa stats options."""
+    from casa_core.stats.margins import Margins
+
+    return " ".join(Margins.from_config(config["statistics"]).options())

@@ -44,10 +44,11 @@ rule report_results:
     params:
         case_study=case_study_options,
         epsilon=config["simulation"]["epsilon"],
+        operator=operator_option,
     shell:
         "exec casa report results --dataset {wildcards.ds} --trials {input.trials} "
         "--steps {input.steps} --stats {input.stats} --likert {input.likert} "
-        "{params.case_study} --epsilon {params.epsilon} --out {output.md} "
+        "{params.case_study} {params.operator} --epsilon {params.epsilon} --out {output.md} "
         "--out-html {output.html} > {log} 2>&1"
 
 

@@ -18,6 +18,7 @@ rule stats:
         "../envs/casa.yaml"
     params:
         likert=likert_option,
+        margins=margin_options,
     shell:
-        "exec casa stats --trials {input.trials} {params.likert} "
+        "exec casa stats --trials {input.trials} {params.likert} {params.margins} "
         "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"

@@ -1,0 +1,137 @@
+"""Modelling variants of the simulated study: the config's ``robustness`` block.
+
+The paper leaves modelling choices open (the inference preset, the evidence, the
+operator model). Each variant of ``robustness.variants`` is an overlay of those keys
+only (:data:`OVERLAY_KEYS`) on the study's config; :func:`variant_config` builds the
+whole config one variant's jobs read. Every variant keeps the study's seeds, scene and
+population, so that variants differ in the overlaid choices alone. The variant named
+:data:`DEFAULT_VARIANT` overlays nothing: it is the study's own settings.
+
+Examples
+--------
+>>> from casa_core.config import DEFAULT_CONFIG, load_config
+>>> config = load_config(DEFAULT_CONFIG)
+>>> variant_names(config)
+['default', 'original', 'paper', 'executed', 'predictive']
+>>> built = variant_config(config, "predictive")
+>>> built["simulation"]["operator"], built["inference"]["preset"]
+('predictive', 'casa')
+>>> settings_text(variant_config(config, "original"))
+'preset original, evidence executed, operator lookahead'
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+
+#: The variant that overlays nothing: the study's config as it is.
+DEFAULT_VARIANT = "default"
+#: The keys an overlay may set: section -> its keys (None: every key of the section).
+OVERLAY_KEYS: dict[str, tuple[str, ...] | None] = {
+    "inference": None,
+    "simulation": ("operator",),
+}
+
+
+def variant_problems(config: Mapping) -> list[str]:
+    """``key: rule`` for every problem of a validated config's ``robustness`` block.
+
+    Each overlay is checked against the config's schema (an unknown preset is named as
+    ``robustness.variants.NAME.inference.preset``); the default variant must exist and
+    overlay nothing; every name in ``robustness.run`` must be a variant.
+
+    Examples
+    --------
+    >>> block = {"variants": {"default": {}, "bad": {"inference": {"preset": "mine"}}}}
+    >>> variant_problems({"robustness": block | {"run": ["default", "other"]}})
+    ... # doctest: +NORMALIZE_WHITESPACE
+    ["robustness.variants.bad.inference.preset: must be one of casa, original, paper,
+      got 'mine'", 'robustness.run: other is not a variant (variants: default, bad)']
+    """
+    from casa_core.config import _problems
+
+    block = config.get("robustness") or {}
+    variants = block.get("variants") or {}
+    problems = []
+    for name, overlay in variants.items():
+        where = f"robustness.variants.{name}"
+        problems += [f"{where}.{problem}" for problem in _problems(overlay, partial=True)]
+        if name == DEFAULT_VARIANT and overlay:
+            problems.append(
+                f"{where}: must overlay nothing (it is the config's own settings); "
+                "give a different choice another name"
+            )
+    if DEFAULT_VARIANT not in variants:
+        problems.append(f"robustness.variants: must contain {DEFAULT_VARIANT!r}, the config itself")
+    for name in block.get("run") or []:
+        if name not in variants:
+            known = ", ".join(variants)
+            problems.append(f"robustness.run: {name} is not a variant (variants: {known})")
+    return problems
+
+
+def variant_names(config: Mapping) -> list[str]:
+    """The variants the ``robustness`` target runs: ``robustness.run``, else every one.
+
+    Examples
+    --------
+    >>> variant_names({"robustness": {"variants": {"default": {}, "x": {}}, "run": ["x"]}})
+    ['x']
+    """
+    block = config["robustness"]
+    return list(block["run"] if block.get("run") else block["variants"])
+
+
+def variant_config(config: Mapping, name: str) -> dict:
+    """The whole config of variant ``name``: its overlay on ``config``, validated.
+
+    ``simulation.participants`` becomes ``robustness.participants``; the ``robustness``
+    block itself is left out, so that a variant's config changes only with what its
+    jobs read.
+
+    Raises
+    ------
+    KeyError
+        If ``name`` is not a variant.
+    casa_core.config.ConfigError
+        If the result is not a valid config.
+
+    Examples
+    --------
+    >>> from casa_core.config import DEFAULT_CONFIG, load_config
+    >>> config = load_config(DEFAULT_CONFIG)
+    >>> built = variant_config(config, "paper")
+    >>> built["inference"]["preset"], built["simulation"]["participants"], "robustness" in built
+    ('paper', 11, False)
+    """
+    from casa_core.config import merge, validate_config
+
+    variants = config["robustness"]["variants"]
+    if name not in variants:
+        known = ", ".join(variants)
+        raise KeyError(f"robustness.variants: no variant {name!r} (variants: {known})")
+    built = copy.deepcopy({key: value for key, value in config.items() if key != "robustness"})
+    merge(built, variants[name])
+    built["simulation"]["participants"] = config["robustness"]["participants"]
+    validated = validate_config(built, source=f"robustness variant {name}")
+    validated.pop("robustness", None)
+    return validated
+
+
+def settings_text(config: Mapping) -> str:
+    """The modelling choices of a config in words: preset, evidence (resolved), operator.
+
+    Examples
+    --------
+    >>> settings_text({"inference": {"preset": "casa", "evidence": None},
+    ...                "simulation": {"operator": "predictive"}})
+    'preset casa, evidence commanded, operator predictive'
+    """
+    from casa_core.config import default
+    from casa_core.presets import preset
+
+    inference = config["inference"]
+    evidence = preset(inference["preset"], evidence=inference.get("evidence")).evidence
+    operator = config["simulation"].get("operator") or default("simulation.operator")
+    return f"preset {inference['preset']}, evidence {evidence}, operator {operator}"

@@ -1,0 +1,165 @@
+# `snakemake --cores all robustness`: the simulated study once per modelling variant
+# (config robustness.variants, casa_core/variants.py) and the paper's claims under each.
+# Each variant has its own config, logs, intents and tables below
+# data/interim/robustness/<variant> and data/processed/robustness/<variant>: variants
+# share nothing they write, and the same seeds. Not part of the default target.
+rule robustness_before:
+    input:
+        config=variant_config_input,
+        scene=config["scene"],
+    output:
+        directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before"),
+    log:
+        "logs/robustness/{variant}/p{p}_before.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "exec casa simulate before --config {input.config} --participant {wildcards.p} "
+        "--out {output} > {log} 2>&1"
+
+
+rule robustness_learn:
+    input:
+        before=ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before",
+        config=variant_config_input,
+    output:
+        library=directory(ROBUST_INTERIM / "{variant}" / "intents" / "p{p}" / "{task}"),
+        row=ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}.csv",
+        timing=ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}_timing.csv",
+    log:
+        "logs/robustness/{variant}/p{p}_{task}_learn.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "exec casa simulate learn --config {input.config} --participant {wildcards.p} "
+        "--task {wildcards.task} --before {input.before} --library {output.library} "
+        "--out {output.row} --timing {output.timing} > {log} 2>&1"
+
+
+rule robustness_after:
+    input:
+        before=ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before",
+        config=variant_config_input,
+        libraries=expand(
+            ROBUST_INTERIM / "{{variant}}" / "intents" / "p{{p}}" / "{task}", task=UNKNOWN_TASKS
+        ),
+    output:
+        directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "after"),
+    log:
+        "logs/robustness/{variant}/p{p}_after.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        library=lambda wildcards: ROBUST_INTERIM / wildcards.variant / "intents" / f"p{wildcards.p}",
+    shell:
+        "exec casa simulate after --config {input.config} --participant {wildcards.p} "
+        "--before {input.before} --library {params.library} --out {output} > {log} 2>&1"
+
+
+rule robustness_process:
+    input:
+        logs=expand(
+            ROBUST_INTERIM / "{{variant}}" / "raw" / "p{p}" / "{stage}",
+            p=ROBUST_PARTICIPANTS,
+            stage=("before", "after"),
+        ),
+        scene=config["scene"],
+    output:
+        trials=ROBUST / "{variant}" / "trials.csv",
+        steps=ROBUST / "{variant}" / "steps.csv",
+        likert=ROBUST / "{variant}" / "likert.csv",
+    log:
+        "logs/robustness/{variant}/process.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        raw=lambda wildcards: ROBUST_INTERIM / wildcards.variant / "raw",
+        out=lambda wildcards: ROBUST / wildcards.variant,
+    shell:
+        "exec casa process {params.raw} --out {params.out} --scene {input.scene} "
+        "--dataset simulated-{wildcards.variant} > {log} 2>&1"
+
+
+rule robustness_stats:
+    input:
+        trials=ROBUST / "{variant}" / "trials.csv",
+        likert=ROBUST / "{variant}" / "likert.csv",
+    output:
+        csv=ROBUST / "{variant}" / "stats.csv",
+        md=ROBUST / "{variant}" / "stats.md",
+    log:
+        "logs/robustness/{variant}/stats.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        margins=margin_options,
+    shell:
+        "exec casa stats --trials {input.trials} --likert {input.likert} {params.margins} "
+        "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"
+
+
+# The expert case study and the arbitration comparison (C3, the expert rows) under the
+# variant's inference; the expert keeps case_study.operator.
+rule robustness_case_study:
+    input:
+        config=variant_config_input,
+        scene=config["scene"],
+    output:
+        steps=ROBUST / "{variant}" / "case_study" / "steps.csv",
+        arbitration=ROBUST / "{variant}" / "case_study" / "arbitration.csv",
+        work=directory(ROBUST_INTERIM / "{variant}" / "case_study"),
+    log:
+        "logs/robustness/{variant}/case_study.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "exec casa case-study --config {input.config} --work {output.work} "
+        "--steps {output.steps} --arbitration {output.arbitration} > {log} 2>&1"
+
+
+rule robustness_claims:
+    input:
+        trials=ROBUST / "{variant}" / "trials.csv",
+        steps=ROBUST / "{variant}" / "steps.csv",
+        likert=ROBUST / "{variant}" / "likert.csv",
+        stats=ROBUST / "{variant}" / "stats.csv",
+        case_steps=ROBUST / "{variant}" / "case_study" / "steps.csv",
+        arbitration=ROBUST / "{variant}" / "case_study" / "arbitration.csv",
+        config=variant_config_input,
+    output:
+        ROBUST / "{variant}" / "claims.csv",
+    log:
+        "logs/robustness/{variant}/claims.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        epsilon=config["simulation"]["epsilon"],
+    shell:
+        "exec casa report claims --trials {input.trials} --steps {input.steps} "
+        "--stats {input.stats} --likert {input.likert} --case-steps {input.case_steps} "
+        "--arbitration {input.arbitration} --variant {wildcards.variant} "
+        "--config {input.config} --epsilon {params.epsilon} --out {output} > {log} 2>&1"
+
+
+rule robustness_table:
+    input:
+        expand(ROBUST / "{variant}" / "claims.csv", variant=VARIANTS),
+    output:
+        csv=ROBUST / "claims.csv",
+        md=ROBUST / "results.md",
+        pdf=FIGURES / "robustness.pdf",
+        png=FIGURES / "robustness.png",
+    log:
+        "logs/robustness/table.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        stem=FIGURES / "robustness",
+    shell:
+        "exec casa report robustness --claims {input} --out-csv {output.csv} "
+        "--out-md {output.md} --figure {params.stem} > {log} 2>&1"
+
+
+rule robustness:
+    input:
+        rules.robustness_table.output,
