@@ -51,12 +51,13 @@ import numpy as np
 import torch
 
 from casa_core.io.atomic import atomic_write_text
+from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
 from casa_core.planning import PlannerConfig
 
 FORMAT = "casa-intent"
 VERSION = 2  # 2: cost_offset
-SUFFIX = ".intent.json"
+SUFFIX = INTENT_SUFFIX
 #: Every key of a file, in the order the format lists them.
 REQUIRED_KEYS = tuple(
     """format version name task participant seed features objects network cost_scale

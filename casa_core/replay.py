@@ -47,6 +47,7 @@ import pandas as pd
 from casa_core.assistant import ARBITRATIONS, Assistant
 from casa_core.defaults import DT, EPSILON
 from casa_core.intents import GoalIntent, Intent
+from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.presets import DEFAULT_PRESET, Preset
 from casa_core.presets import preset as named_preset
 from casa_core.robot.keys import keys_to_action, parse_keys
@@ -55,8 +56,6 @@ from casa_core.vocabulary import METHOD_ARBITRATION
 
 #: The columns of a replay table, in order.
 COLUMNS = ("t", "intent", "suboptimality", "beta", "belief", "theta_star", "alpha", "misspecified")
-#: The suffix of a learned intent's file (casa-intent/1).
-INTENT_SUFFIX = ".intent.json"
 
 
 class ReplayError(ValueError):

@@ -56,6 +56,7 @@ __all__ = [
     "SINGLE_TRIAL_PHASES",
     "SOURCES",
     "SURVEYS_NAME",
+    "INTENT_SUFFIX",
     "SURVEY_ANSWER_KEY",
     "SURVEY_COLUMNS",
     "SURVEY_ENUMS",
@@ -71,6 +72,8 @@ __all__ = [
 SCHEMA = "casa-trial/1"
 #: The name of every file of Likert answers.
 SURVEYS_NAME = "surveys.csv"
+#: The suffix of a learned intent's file (casa-intent, casa_core.library).
+INTENT_SUFFIX = ".intent.json"
 
 #: Metadata keys every trial has, and the ones it may have.
 META_REQUIRED = ("schema", "participant", "task", "method", "phase", "source")

@@ -5,13 +5,6 @@ Checks never stop at the first problem: each reports every :class:`Problem` it f
 rules are in :mod:`casa_core.io.metadata`. The rules work on text and parsed values
 only; :mod:`casa_core.io.trial_log` reads and writes the files. The contract itself is
 ``docs/data-contracts.md`` (data in :mod:`casa_core.io.contract`).
-
-Examples
---------
->>> meta = {"schema": "casa-trial/1", "participant": "p01", "task": "known_goal",
-...         "method": "CASA", "phase": "no_misspecification", "source": "robot"}
->>> [str(p) for p in check_meta(meta, "t.json")]
-["t.json: key 'source': [enum] is 'robot', expected one of human, simulated"]
 """
 
 from __future__ import annotations
