@@ -12,12 +12,12 @@ Examples
 >>> from casa_core.config import DEFAULT_CONFIG, load_config
 >>> config = load_config(DEFAULT_CONFIG)
 >>> variant_names(config)
-['default', 'original', 'paper', 'executed', 'predictive']
->>> built = variant_config(config, "predictive")
+['default', 'original', 'paper', 'executed', 'lookahead']
+>>> built = variant_config(config, "lookahead")
 >>> built["simulation"]["operator"], built["inference"]["preset"]
-('predictive', 'casa')
+('lookahead', 'casa')
 >>> settings_text(variant_config(config, "original"))
-'preset original, evidence executed, operator lookahead'
+'preset original, evidence executed, operator predictive'
 """
 
 from __future__ import annotations

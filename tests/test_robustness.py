@@ -72,7 +72,7 @@ def test_the_variants_to_run_must_be_defined(tmp_path):
 def test_a_variant_changes_only_its_overlay_and_keeps_the_seeds():
     study = load_config(CONFIG)
     names = variants.variant_names(study)
-    assert names == ["default", "original", "paper", "executed", "predictive"]
+    assert names == ["default", "original", "paper", "executed", "lookahead"]
     for name in names:
         built = variants.variant_config(study, name)
         overlay = study["robustness"]["variants"][name]
@@ -265,7 +265,7 @@ def test_the_claims_command_writes_one_variants_rows(tmp_path):
     claims = pd.read_csv(out, keep_default_na=False)
     assert list(claims.columns) == ROBUSTNESS_COLUMNS
     assert set(claims["variant"]) == {"original"}
-    assert set(claims["settings"]) == {"preset original, evidence executed, operator lookahead"}
+    assert set(claims["settings"]) == {"preset original, evidence executed, operator predictive"}
     # By construction: green ends the most confident (2.5 > epsilon 1) and alpha falls to
     # 0.3 < 0.5 in the one Known Goal trial, so C1 holds with a share of 1.
     c1 = claims.set_index("claim").loc["C1"]

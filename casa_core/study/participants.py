@@ -55,8 +55,9 @@ Two operator models share this machinery (config key ``simulation.operator``):
   theory of human control", *Biological Cybernetics* 104(1-2)), whose predictor
   likewise bridges the operator's own delay.
 
-The predictive operator's two parameters, fixed from the manual-control literature
-before any result was looked at:
+The predictive operator's three parameters, taken from the manual-control and
+psychology literature before any of the study's results under this model were looked
+at:
 
 - :data:`LEAD_TIME` T_L = 0.5 s. In McRuer's crossover model (McRuer & Jex 1967,
   "A review of quasi-linear pilot models", *IEEE Trans. Human Factors in
@@ -78,6 +79,19 @@ before any result was looked at:
   35(28)); depth is the noisiest axis here. A shorter filter would turn the
   perception noise above (AR(1), 0.5 s) into velocity errors larger than the
   deadband.
+- :data:`REFRACTORY` = 0.25 s, the shortest interval from one change of the held keys
+  to the next press. A person cannot start a second response within about
+  0.15-0.5 s of the first: the psychological refractory period (Welford 1952, "The
+  'psychological refractory period' and the timing of high-speed performance",
+  *Br. J. Psychol.* 43; Pashler 1994, "Dual-task interference in simple tasks",
+  *Psychol. Bull.* 116(2)), which intermittent control takes as its shortest open-loop
+  interval (Gawthrop et al. 2011 above). We take the lower end, 0.25 s, because the
+  reaction time above already holds the perceive-decide delay. A release is not held
+  back, as lifting a finger chooses no key, but like any response it starts the
+  interval before the next press. Without this interval the noisy
+  prediction (perception noise above) moves a second held key from axis to axis at the
+  tick rate; 0.5 s made an operator overshoot so far that it failed a task
+  without assistance (docs/departures.md gives the numbers).
 """
 
 from __future__ import annotations
@@ -97,6 +111,8 @@ DONE_ROT_TOLERANCE = 0.15  # rad
 LEAD_TIME = 0.5
 #: Time constant of the predictive operator's velocity estimate, s (module docstring).
 VELOCITY_FILTER = 1.0
+#: Shortest interval from a change of the predictive operator's keys to its next press, s.
+REFRACTORY = 0.25
 
 
 @dataclass(frozen=True)
@@ -272,7 +288,8 @@ class PredictiveParticipant(SimulatedParticipant):
     operator filters the perceived positions into a velocity, predicts the arm
     :data:`LEAD_TIME` plus its own reaction time ahead and presses only when that
     prediction leaves the path, or falls behind the point of the reference that far
-    ahead, by more than the deadband.
+    ahead, by more than the deadband, and presses no sooner than :data:`REFRACTORY` after its
+    last change of keys.
     """
 
     def __init__(self, params: ParticipantParams, reference, *, rng, tick: float = 0.05):
@@ -284,6 +301,19 @@ class PredictiveParticipant(SimulatedParticipant):
         self._velocity = np.zeros(4)
         self._last: tuple[float, np.ndarray] | None = None
         self._pushing = False
+        self._now = 0.0
+        self._changed_at = -np.inf
+
+    def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
+        chosen = super()._choose_keys(error)
+        if chosen == self._held:
+            return chosen
+        # A press waits out the refractory interval of the last change; a release
+        # never waits, and starts the interval like any other response.
+        if not chosen < self._held and self._now - self._changed_at < REFRACTORY - 1e-9:
+            return self._held
+        self._changed_at = self._now
+        return chosen
 
     @property
     def horizon(self) -> float:
@@ -291,6 +321,7 @@ class PredictiveParticipant(SimulatedParticipant):
         return self.params.reaction_time + LEAD_TIME
 
     def _error(self, perceived: np.ndarray, t: float) -> np.ndarray | None:
+        self._now = t
         ahead = self._track(perceived)
         self._estimate_velocity(perceived, t)
         if self._arrived(perceived, ahead):
