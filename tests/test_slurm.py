@@ -17,7 +17,7 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
-from single_node_slurm import Cluster, why_not
+from single_node_slurm import Cluster, accounting_why_not, why_not
 from test_workflow import BIN, ENV, copy_workflow
 
 from casa_core.vocabulary import UNKNOWN_TASKS
@@ -36,16 +36,17 @@ EXPECTED_JOBS = Counter(
 )
 # Last: --configfile takes every word after it as a file.
 COMMON = ("--configfile", "config/ci.yaml")
-# The test cluster has no accounting database: job states come from squeue, read at
-# once and then every few seconds (the plugin's default first wait is 40 s).
+# Job states read at once and then every few seconds (the plugin's first wait is 40 s);
+# --verbose logs which command read them.
 SLURM = (
     "--workflow-profile",
     "profiles/slurm",
-    "--slurm-status-command",
-    "squeue",
     "--slurm-init-seconds-before-status-checks",
     "2",
+    "--verbose",
 )
+# A cluster without accounting: states from squeue, as profiles/slurm's comment says.
+SQUEUE = ("--slurm-status-command", "squeue")
 TIMEOUT = 1800
 
 
@@ -60,17 +61,17 @@ pytestmark = pytest.mark.skipif(_skip_reason() is not None, reason=str(_skip_rea
 
 @pytest.fixture(scope="module")
 def cluster():
-    running = Cluster()
+    running = Cluster(accounting=accounting_why_not() is None)
     try:
         yield running.start()
     finally:
         running.stop()
 
 
-def _snakemake(workdir: Path, *args: str) -> subprocess.Popen:
+def _snakemake(workdir: Path, *args: str, targets=TARGETS) -> subprocess.Popen:
     with open(workdir / "snakemake.out", "wb") as log:  # the child keeps its own copy
         return subprocess.Popen(
-            [str(BIN / "snakemake"), *args, *TARGETS, *COMMON],
+            [str(BIN / "snakemake"), *args, *targets, *COMMON],
             cwd=workdir,
             env=ENV,
             stdout=log,
@@ -100,6 +101,11 @@ def _outputs(workdir: Path) -> dict[str, bytes]:
     }
 
 
+def _status_commands(log: str) -> set[str]:
+    """The commands the plugin read job states with (its --verbose timing lines)."""
+    return set(re.findall(r"Status query timing \(cycle\): command=(\w+)", log))
+
+
 def _rule(comment: str) -> str:
     """The rule of a job from its Slurm comment: ``rule_<name>[_wildcards_<values>]``."""
     return comment.removeprefix("rule_").split("_wildcards_")[0]
@@ -114,7 +120,7 @@ def test_the_slurm_profile_runs_the_dag_through_slurm_with_the_local_outputs(
     # moments (job starts, status polls).
     reference = _snakemake(local, "--cores", "2")
     try:
-        log = _finish(_snakemake(on_slurm, *SLURM), on_slurm)
+        log = _finish(_snakemake(on_slurm, *SLURM, *SQUEUE), on_slurm)
     finally:
         _finish(reference, local)
 
@@ -133,6 +139,10 @@ def test_the_slurm_profile_runs_the_dag_through_slurm_with_the_local_outputs(
         if Path(m["dir"]) == on_slurm
     }
     assert completed == {j["id"] for j in jobs}
+    assert _status_commands(log) == {"squeue"}
+    if cluster.accounting:
+        accounted = [j for j in cluster.accounted_jobs() if Path(j["workdir"]) == on_slurm]
+        assert sorted(accounted, key=str) == sorted(jobs, key=str)
 
     # The same bytes as on one machine, tables, trial logs, intents and figures alike.
     expected, produced = _outputs(local), _outputs(on_slurm)
@@ -140,3 +150,14 @@ def test_the_slurm_profile_runs_the_dag_through_slurm_with_the_local_outputs(
     assert [name for name in expected if produced[name] != expected[name]] == []
     for part in ("p1/before/", "p1/after/", "intents/p1/", "case_study/steps.csv"):
         assert any(part in name and name.endswith((".csv", ".json")) for name in expected), part
+
+
+@pytest.mark.skipif(accounting_why_not() is not None, reason=str(accounting_why_not()))
+def test_with_accounting_the_profile_reads_job_states_from_sacct(cluster, tmp_path_factory):
+    # The plugin's default, as on most clusters: slurmdbd keeps the jobs, sacct reads them.
+    workdir = copy_workflow(tmp_path_factory.mktemp("sacct"))
+    log = _finish(_snakemake(workdir, *SLURM, targets=("figures/scene.png",)), workdir)
+    assert _status_commands(log) == {"sacct"}
+    jobs = [j for j in cluster.accounted_jobs() if Path(j["workdir"]) == workdir]
+    assert [(_rule(j["comment"]), j["state"]) for j in jobs] == [("figure_scene", "COMPLETED")]
+    assert (workdir / "figures" / "scene.png").read_bytes()[:4] == b"\x89PNG"
