@@ -148,14 +148,16 @@ def _state(pid: int) -> str:
 def clear_leftovers() -> None:
     """Stop the daemons a killed earlier run left, by the pids its config names."""
     ours = [c for c in (SLURM_CONF, DBD_CONF) if c.exists() and MARKER in c.read_text()]
+    named = [line for c in ours for line in c.read_text().splitlines() if "# pids: " in line]
+    pid_files = [Path(f) for f in named[0].split()[2:]] if named else []  # slurmd first
+    for pid_file in pid_files:
+        try:
+            _stop(int(pid_file.read_text()), name=pid_file.name.split(".")[0])
+        except (OSError, ValueError):
+            pass
+    if pid_files:
+        shutil.rmtree(pid_files[0].parent, ignore_errors=True)
     for conf in ours:
-        named = [line.split()[2:] for line in conf.read_text().splitlines() if "# pids: " in line]
-        for pid_file in map(Path, named[0] if named else []):
-            try:
-                _stop(int(pid_file.read_text()), name=pid_file.name.split(".")[0])
-            except (OSError, ValueError):
-                pass
-            shutil.rmtree(pid_file.parent, ignore_errors=True)
         conf.unlink()
 
 
