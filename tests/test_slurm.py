@@ -5,7 +5,9 @@ and stopped by its daemons' pids after it. The DAG is one simulated participant'
 chain of the CI configuration (simulation before learning, one learned intent per
 unknown task, simulation after learning) and the case study with its figure: every kind
 of job the study has (directory outputs, torch, fan-out and fan-in), at a fifth of the CI
-target's CPU time, since the test runs it twice. Docs: docs/cluster.md.
+target's CPU time, since the test runs it twice. Job states come from squeue, as on a
+cluster without accounting; where the cluster has accounting, a second test reads them
+from sacct, the plugin's default. Docs: docs/cluster.md.
 """
 
 from __future__ import annotations
