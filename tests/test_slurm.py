@@ -4,7 +4,7 @@ The cluster (tests/single_node_slurm.py) is started from Debian's packages for t
 and stopped by its daemons' pids after it. The DAG is one simulated participant's whole
 chain of the CI configuration (simulation before learning, one learned intent per
 unknown task, simulation after learning) and the case study with its figure: every kind
-of job the study has (directory outputs, torch, fan-out and fan-in), at a fifth of the CI
+of job the study has (directory outputs, torch, fan-out and fan-in), at a quarter of the CI
 target's CPU time, since the test runs it twice. Job states come from squeue, as on a
 cluster without accounting; where the cluster has accounting, a second test reads them
 from sacct, the plugin's default. Docs: docs/cluster.md.
