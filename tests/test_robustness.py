@@ -80,7 +80,7 @@ def test_a_variant_changes_only_its_overlay_and_keeps_the_seeds():
         undone = {**built, "inference": study["inference"]}
         undone["simulation"] = {**built["simulation"], "operator": study["simulation"]["operator"]}
         undone["simulation"]["participants"] = study["simulation"]["participants"]
-        expected = {key: value for key, value in study.items() if key != "robustness"}
+        expected = {k: v for k, v in study.items() if k not in variants.RUNNING_BLOCKS}
         assert undone == expected, name
         assert built["simulation"]["seed"] == study["simulation"]["seed"]
         assert built["inference"] == {**study["inference"], **overlay.get("inference", {})}

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from casa_core import config as casa_config
+from casa_core import power as casa_power
 from casa_core import variants as casa_variants
 from casa_core import vocabulary
 from casa_core.io.atomic import atomic_write_text
@@ -54,10 +55,12 @@ CASE_STUDY = config["simulate"]
 RAW = Path("data/raw")
 PROCESSED = Path("data/processed")
 FIGURES = Path("figures")
+# The jobs' Snakemake benchmark files (their times), read by `casa progress`.
+BENCHMARKS = Path("benchmarks")
 # Dataset names become folder and file names: keep them portable.
 DATASET_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 # Outputs of the dataset-independent rules live here; no dataset may take the name.
-RESERVED = ("case_study", "robustness")
+RESERVED = ("case_study", "robustness", "power")
 # The tasks whose intents the simulated participants teach (workflow/rules/study.smk).
 UNKNOWN_TASKS = vocabulary.UNKNOWN_TASKS
 # Datasets that rules of this workflow write into data/raw (the simulated study).
@@ -224,8 +227,12 @@ VARIANT_CONFIGS = {
 }
 
 
+# The power target's variants (workflow/rules/power.smk) may be others of robustness.variants.
+POWER_VARIANTS = casa_power.power_variants(config)
+
+
 wildcard_constraints:
-    variant="|".join(re.escape(v) for v in VARIANTS) or "(?!)",
+    variant="|".join(re.escape(v) for v in dict.fromkeys(VARIANTS + POWER_VARIANTS)) or "(?!)",
 
 
 def variant_config_input(wildcards):
