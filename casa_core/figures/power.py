@@ -53,7 +53,7 @@ def power_figure(power: pd.DataFrame) -> Figure:
                 ax = grid[i][j]
                 named[f"{hypothesis} {metric}"] = ax
                 part = frame[(frame["hypothesis"] == hypothesis) & (frame["metric"] == metric)]
-                _panel(ax, part, colours)
+                _panel(ax, part, colours, dodge=_dodges(frame, variants))
                 if i == 0:
                     ax.set_title(style.display_name(metric))
                 if j == 0:
@@ -63,6 +63,9 @@ def power_figure(power: pd.DataFrame) -> Figure:
         for ax in named.values():
             ax.set_ylim(-0.03, 1.03)
             ax.set_xticks(sizes)
+        first = grid[0][0]
+        first.text(PAPER_N, 1.0, f"paper: N = {PAPER_N} ", color="0.45", fontsize=6.5,
+                   va="top", ha="right")  # fmt: skip
         handles = [Line2D([], [], color=colours[v], label=v) for v in variants]
         handles += [
             Line2D([], [], color="0.3", linestyle=LINESTYLES[a], label=f"{a} form")
@@ -81,13 +84,21 @@ def power_figure(power: pd.DataFrame) -> Figure:
     return fig
 
 
-def _panel(ax, part: pd.DataFrame, colours: dict) -> None:
+def _dodges(frame: pd.DataFrame, variants: list[str]) -> dict:
+    """A small shift along N per variant and analysis, so that their error bars part."""
+    lines = [(v, a) for v in variants for a in ANALYSES]
+    span = max(float(frame["N"].max()), PAPER_N) - min(float(frame["N"].min()), PAPER_N)
+    step = 0.012 * (span or 1.0)
+    return {line: (k - (len(lines) - 1) / 2) * step for k, line in enumerate(lines)}
+
+
+def _panel(ax, part: pd.DataFrame, colours: dict, *, dodge: dict) -> None:
     ax.axhline(TARGET, color="0.5", linestyle=":", linewidth=0.9)
     ax.axvline(PAPER_N, color="0.8", linewidth=3, zorder=0)
     for (variant, analysis), line in part.groupby(["variant", "analysis"], sort=False):
         line = line.sort_values("N")
         ax.errorbar(
-            line["N"],
+            line["N"] + dodge.get((variant, analysis), 0.0),
             line["power"],
             yerr=[line["power"] - line["ci_low"], line["ci_high"] - line["power"]],
             color=colours[variant],

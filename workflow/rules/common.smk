@@ -1,5 +1,6 @@
 # Config validation, the study's vocabulary, dataset discovery and the list of outputs.
 # No rules here.
+import functools
 import os
 import re
 import sys
@@ -245,3 +246,36 @@ def margin_options(wildcards=None):
     from casa_core.stats.margins import Margins
 
     return " ".join(Margins.from_config(config["statistics"]).options())
+
+
+# The power target (workflow/rules/power.smk; casa_core/power.py): replicate studies of
+# each variant of power.variants, each with its own seed.
+POWER_INTERIM = Path("data/interim/power")
+POWER = PROCESSED / "power"
+POWER_BENCHMARKS = BENCHMARKS / "power"
+POWER_SIZES = casa_power.power_sizes(config)
+POWER_PARTICIPANTS = list(range(1, max(POWER_SIZES) + 1))
+POWER_REPLICATES = list(range(1, config["power"]["replicates"] + 1))
+# A replicate's folder, benchmark folder (its jobs' times, for casa progress) and logs.
+REPLICATE = POWER_INTERIM / "{variant}" / "r{r}"
+REPLICATE_BENCHMARKS = POWER_BENCHMARKS / "{variant}" / "r{r}"
+REPLICATE_LOGS = "logs/power/{variant}/r{r}"
+# Each variant's config for the power target, computed once (replicates differ in seed).
+POWER_VARIANT_CONFIGS = {
+    name: casa_power.power_variant_config(config, name) for name in POWER_VARIANTS
+}
+
+
+@functools.cache
+def replicate_config_file(variant, r):
+    """Replicate r's config file, written the first time a job of it is planned."""
+    settings = casa_power.replicate_config(POWER_VARIANT_CONFIGS[variant], int(r))
+    return effective_config_file(POWER_INTERIM / variant / f"r{r}" / "config.yaml", settings)
+
+
+def replicate_config_input(wildcards):
+    return replicate_config_file(wildcards.variant, wildcards.r)
+
+
+wildcard_constraints:
+    r=r"\d+",

@@ -6,39 +6,6 @@
 # on the replicate's config, so the DAG spreads over a cluster one participant stage a
 # job. Logs, intents and the steps table are temporary: a replicate keeps its
 # trials.csv and detections.csv. Not part of the default target.
-import functools
-
-POWER_INTERIM = Path("data/interim/power")
-POWER = PROCESSED / "power"
-POWER_BENCHMARKS = BENCHMARKS / "power"
-POWER_SIZES = casa_power.power_sizes(config)
-POWER_PARTICIPANTS = list(range(1, max(POWER_SIZES) + 1))
-POWER_REPLICATES = list(range(1, config["power"]["replicates"] + 1))
-# A replicate's folder, benchmark folder (its jobs' times, for casa progress) and logs.
-REPLICATE = POWER_INTERIM / "{variant}" / "r{r}"
-REPLICATE_BENCHMARKS = POWER_BENCHMARKS / "{variant}" / "r{r}"
-REPLICATE_LOGS = "logs/power/{variant}/r{r}"
-# Each variant's config for the power target, computed once (replicates differ in seed).
-POWER_VARIANT_CONFIGS = {
-    name: casa_power.power_variant_config(config, name) for name in POWER_VARIANTS
-}
-
-
-wildcard_constraints:
-    r=r"\d+",
-
-
-@functools.cache
-def replicate_config_file(variant, r):
-    """Replicate r's config file, written the first time a job of it is planned."""
-    settings = casa_power.replicate_config(POWER_VARIANT_CONFIGS[variant], int(r))
-    return effective_config_file(POWER_INTERIM / variant / f"r{r}" / "config.yaml", settings)
-
-
-def replicate_config_input(wildcards):
-    return replicate_config_file(wildcards.variant, wildcards.r)
-
-
 use rule robustness_before as power_before with:
     input:
         config=replicate_config_input,
@@ -144,6 +111,8 @@ rule power_progress:
         REPLICATE / "progress.txt",
     log:
         f"{REPLICATE_LOGS}/progress.log",
+    conda:
+        "../envs/casa.yaml"
     params:
         config=CONFIG_FILE,
         log=POWER / "progress.log",

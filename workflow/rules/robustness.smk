@@ -192,6 +192,8 @@ rule robustness_progress:
         ROBUST_INTERIM / "{variant}" / "progress.txt",
     log:
         "logs/robustness/{variant}/progress.log",
+    conda:
+        "../envs/casa.yaml"
     params:
         config=CONFIG_FILE,
         log=ROBUST / "progress.log",
