@@ -15,9 +15,8 @@ import pandas as pd
 import pytest
 import yaml
 from scipy.stats import norm
-from test_logs_synthetic import ROOT
-from test_robustness import _jobs
-from test_workflow import copy_workflow, snakemake
+from test_robustness import CONFIG, _overlay, dry_run
+from test_workflow import snakemake
 
 from casa_core import datasets, power, progress
 from casa_core.cli import main
@@ -35,16 +34,6 @@ from casa_core.stats.power import (
     wilson_interval,
 )
 from casa_core.vocabulary import CASA_AFTER_LEARNING, CASA_BEFORE_LEARNING
-
-CONFIG = ROOT / "config" / "config.yaml"
-CI = ROOT / "config" / "ci.yaml"
-
-
-def _overlay(tmp_path, data) -> str:
-    path = tmp_path / "overlay.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return str(path)
-
 
 # --- seeds and configs ---------------------------------------------------------------
 
@@ -306,18 +295,12 @@ def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys):
 
 
 def test_a_dry_run_gives_each_replicate_its_jobs_seed_and_files(tmp_path):
-    repo = copy_workflow(tmp_path / "wf")
-    result = snakemake(repo, "--dry-run", "power", "--configfile", "config/ci.yaml")
-    assert result.returncode == 0, result.stdout + result.stderr
-    jobs = _jobs(result.stdout)
-    counts = pd.Series([job["rule"] for job in jobs]).value_counts()
+    repo, jobs, counts = dry_run(tmp_path, "power")
     # ci.yaml: sizes 2, 3 and 2 replicates: 3 participants per replicate.
     assert counts["power_before"] == counts["power_after"] == 6
     assert counts["power_learn"] == 12
     assert counts["power_process"] == counts["power_detect"] == counts["power_progress"] == 2
     assert counts["power_table"] == counts["power_figure"] == 1
-    outputs = [path for job in jobs for path in job["output"]]
-    assert len(outputs) == len(set(outputs)), "two jobs write one path"
     for job in jobs:
         if "--config data/interim/power/" in job["shell"]:
             replicate = job["shell"].split("--config data/interim/power/")[1].split("/config")[0]
