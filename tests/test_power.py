@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 import yaml
 from scipy.stats import norm
-from test_robustness import CONFIG, _overlay, dry_run
+from test_robustness import CI, CONFIG, _overlay, dry_run
 from test_workflow import snakemake
 
 from casa_core import datasets, power, progress
@@ -274,6 +274,17 @@ def test_progress_counts_units_and_estimates_the_time_left(tmp_path):
     assert done.line("power").startswith("power: 1/2 replicates done (3/4 jobs); 20 s")
     nothing = progress.read_progress(tmp_path / "none", {"v/r1": 2})
     assert "about unknown left" in nothing.line("power")
+
+
+def test_the_units_of_each_target_and_their_jobs():
+    ci = load_config(CONFIG, CI)
+    # A replicate: 4 jobs per participant (before, 2 learned intents, after) x 3, its
+    # tables and its detections; a robustness variant: 4 x 2 participants, its tables,
+    # statistics, case study and claims.
+    assert progress.target_units(ci, "power") == {"default/r1": 14, "default/r2": 14}
+    assert progress.target_units(ci, "robustness") == {"default": 12, "original": 12}
+    with pytest.raises(ValueError, match="no target 'all'"):
+        progress.target_units(ci, "all")
 
 
 def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys):
