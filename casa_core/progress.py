@@ -4,8 +4,11 @@ Each job of these targets writes a Snakemake benchmark file (``benchmark:``, a T
 whose ``s`` is the job's wall time) under ``benchmarks/<target>/<unit>/``, a unit being
 one power replicate (``<variant>/r<replicate>``) or one robustness variant. From the
 files present, :func:`read_progress` counts the units and jobs done, the time per unit
-and the time left at the pace so far. Measured times stay in these files and in the
-progress log; no table of results contains them.
+and the time left at the pace so far. A benchmark older than its unit's config
+(``data/interim/<target>/<unit>/config.yaml``, rewritten when what the unit's jobs read
+changes) is from an earlier configuration and not counted; one left by a forced rerun
+(``--forcerun``) counts until its job runs again. Measured times stay in these files and
+in the progress log; no table of results contains them.
 
 Examples
 --------
@@ -29,6 +32,8 @@ from pathlib import Path
 
 #: Where the jobs' benchmark files go, one folder per target (workflow/rules/*.smk).
 BENCHMARKS = Path("benchmarks")
+#: Where each unit's config is written: INTERIM / target / unit / "config.yaml".
+INTERIM = Path("data/interim")
 #: The targets that report progress and the word for their units.
 UNIT_WORDS = {"power": "replicates", "robustness": "variants"}
 #: The robustness jobs of a variant besides its participants': tables, statistics, the
@@ -82,26 +87,31 @@ def _job_seconds(path: Path) -> float:
     return sum(values) / len(values) if values else math.nan
 
 
-def read_progress(root: Path | str, units: Mapping[str, int]) -> Progress:
+def read_progress(
+    root: Path | str, units: Mapping[str, int], *, configs: Mapping[str, Path] | None = None
+) -> Progress:
     """The progress of a target whose unit ``u`` has ``units[u]`` jobs under ``root / u``.
 
     A job is done when its benchmark file exists (Snakemake writes it when the job
-    ends); a unit when all its jobs are. The time left is the remaining jobs at the mean
-    job time so far, divided by the parallelism so far (job time done over the wall
-    time from the first job's start to the last one's end).
+    ends) and is not older than the unit's config in ``configs`` (if given and present);
+    a unit when all its jobs are. The time left is the remaining jobs at the mean job
+    time so far, divided by the parallelism so far (job time done over the wall time
+    from the first job's start to the last one's end).
     """
     root = Path(root)
+    configs = configs or {}
     done_units, jobs_done, job_time, unit_times = 0, 0, 0.0, []
     starts, ends = [], []
     for unit, expected in units.items():
         files = sorted((root / unit).glob("*.tsv"))
+        config = Path(configs[unit]) if unit in configs else None
+        since = config.stat().st_mtime if config is not None and config.is_file() else -math.inf
         seconds = []
         for path in files:
-            value = _job_seconds(path)
-            if math.isnan(value):
+            value, end = _job_seconds(path), path.stat().st_mtime
+            if math.isnan(value) or end < since:
                 continue
             seconds.append(value)
-            end = path.stat().st_mtime
             starts.append(end - value)
             ends.append(end)
         jobs_done += len(seconds)
@@ -141,3 +151,14 @@ def target_units(config: Mapping, target: str) -> dict[str, int]:
         per_variant += ROBUSTNESS_EXTRA_JOBS
         return {name: per_variant for name in variants.variant_names(config)}
     raise ValueError(f"progress: no target {target!r} (targets: {', '.join(UNIT_WORDS)})")
+
+
+def unit_configs(target: str, units: Mapping[str, int]) -> dict[str, Path]:
+    """Each unit's config file, as the workflow writes it (:data:`INTERIM`).
+
+    Examples
+    --------
+    >>> unit_configs("power", {"default/r1": 14})
+    {'default/r1': PosixPath('data/interim/power/default/r1/config.yaml')}
+    """
+    return {unit: INTERIM / target / unit / "config.yaml" for unit in units}

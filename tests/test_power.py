@@ -274,6 +274,13 @@ def test_progress_counts_units_and_estimates_the_time_left(tmp_path):
     assert done.line("power").startswith("power: 1/2 replicates done (3/4 jobs); 20 s")
     nothing = progress.read_progress(tmp_path / "none", {"v/r1": 2})
     assert "about unknown left" in nothing.line("power")
+    # r1's config rewritten at t = 115 (a new configuration): its job that ended at 110
+    # is from the earlier one and not counted; its job at 120 and r2's are.
+    config = tmp_path / "r1.yaml"
+    config.write_text("")
+    os.utime(config, (115.0, 115.0))
+    fresh = progress.read_progress(tmp_path, {"v/r1": 2, "v/r2": 2}, configs={"v/r1": config})
+    assert (fresh.units_done, fresh.jobs_done) == (0, 2)
 
 
 def test_the_units_of_each_target_and_their_jobs():
@@ -287,7 +294,8 @@ def test_the_units_of_each_target_and_their_jobs():
         progress.target_units(ci, "all")
 
 
-def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys):
+def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the units' configs are looked for below data/interim
     config = _overlay(tmp_path, {"power": {"sizes": [2], "replicates": 2}})
     # A replicate of 2 participants: 4 jobs each, its tables, its detections (10 jobs).
     for job in range(10):

@@ -160,11 +160,13 @@ def _progress(args) -> int:
 
     from casa_core.config import load_config
     from casa_core.io.atomic import atomic_write_text
-    from casa_core.progress import read_progress, target_units
+    from casa_core.progress import read_progress, target_units, unit_configs
 
     config = load_config(*args.config)
     units = target_units(config, args.target)
-    line = read_progress(Path(args.benchmarks) / args.target, units).line(args.target)
+    root = Path(args.benchmarks) / args.target
+    done = read_progress(root, units, configs=unit_configs(args.target, units))
+    line = done.line(args.target)
     if args.done:
         line = f"{line} (just done: {args.done})"
     print(line, flush=True)
