@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
-import numpy as np
 import pandas as pd
 
 from casa_core.stats import _claim_tests as checks
@@ -211,23 +210,3 @@ def power_table(detections: pd.DataFrame | Sequence[pd.DataFrame]) -> pd.DataFra
     table = table.sort_values(keys, key=lambda s: order.get(s.name, lambda x: x)(s))
     table["N"] = table["N"].astype(int)
     return table.reset_index(drop=True)
-
-
-def power_at(table: pd.DataFrame, *, target: float = 0.8) -> pd.DataFrame:
-    """Per variant, hypothesis, metric and form, the smallest N whose power >= ``target``.
-
-    NaN where no N of the grid reaches it.
-
-    Examples
-    --------
-    >>> table = pd.DataFrame({"variant": "v", "N": [6, 8, 11], "hypothesis": "H1",
-    ...     "metric": "error", "analysis": "paper", "power": [0.5, 0.85, 0.9]})
-    >>> power_at(table)["N"].tolist()
-    [8.0]
-    """
-    keys = ["variant", "hypothesis", "metric", "analysis"]
-    rows = []
-    for key, part in table.groupby(keys, sort=False):
-        reached = part.loc[part["power"] >= target, "N"]
-        rows.append([*key, float(reached.min()) if len(reached) else np.nan])
-    return pd.DataFrame(rows, columns=[*keys, "N"])
