@@ -34,6 +34,8 @@ include: "workflow/rules/study.smk"
 include: "workflow/rules/report.smk"
 # `snakemake --cores all robustness`: the claims under each modelling variant.
 include: "workflow/rules/robustness.smk"
+# `snakemake --cores all power`: the simulated power of H1-H3 against participants.
+include: "workflow/rules/power.smk"
 
 
 # The report's landing page: results, figures, statistics, tables, then the workflow.

@@ -14,8 +14,9 @@ from casa_core.figures.replay import replay_figure
 
 PROCESSED, FIGS = Path("data/processed"), Path("figures")
 problems = []
-# `check_figures.py robustness`: only the robustness target's table and figure.
+# `check_figures.py robustness` (or `power`): only that target's table and figure.
 ROBUSTNESS = sys.argv[1:] == ["robustness"]
+POWER = sys.argv[1:] == ["power"]
 
 
 def check_file(path: Path) -> None:
@@ -52,6 +53,19 @@ if ROBUSTNESS:
         problems.append("robustness/claims.csv: fewer than 2 variants")
     check_panels("robustness", robustness_figure(table), 1)
     finish("robustness table and figure complete")
+
+if POWER:
+    from casa_core.figures.power import power_figure
+    from casa_core.stats.power import POWER_COLUMNS
+
+    for ext in ("pdf", "png"):
+        check_file(FIGS / f"power.{ext}")
+    table = datasets.read_table(PROCESSED / "power" / "power.csv")
+    if list(table.columns) != POWER_COLUMNS:
+        problems.append(f"power/power.csv: columns {list(table.columns)}, expected {POWER_COLUMNS}")
+    # A panel per hypothesis (H1-H3) and metric (error, efficiency, relative effort).
+    check_panels("power", power_figure(table), 9)
+    finish("power table and figure complete")
 
 for stem in ["arbitration", "case_study", "simulated/objective", "simulated/likert"]:
     for ext in ("pdf", "png"):

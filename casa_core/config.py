@@ -266,8 +266,10 @@ def _consistency(config: dict) -> list[str]:
         return [f"{where}: must have as many entries as values ({len(keys['values'])})"]
     if abs(sum(keys["p"]) - 1) > 1e-8:
         return [f"{where}: must sum to 1, got {sum(keys['p'])!r}"]
+    from casa_core.power import power_problems
+
     # Each modelling variant's overlay, checked against this schema (casa_core/variants.py).
-    return variant_problems(config)
+    return variant_problems(config) + power_problems(config)
 
 
 def _raise(source: str, problems: list[str]) -> None:

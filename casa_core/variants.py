@@ -32,6 +32,8 @@ OVERLAY_KEYS: dict[str, tuple[str, ...] | None] = {
     "inference": None,
     "simulation": ("operator",),
 }
+#: The config blocks of the targets that run variants, left out of a variant's config.
+RUNNING_BLOCKS = ("robustness", "power")
 
 
 def variant_problems(config: Mapping) -> list[str]:
@@ -83,12 +85,13 @@ def variant_names(config: Mapping) -> list[str]:
     return list(block["run"] if block.get("run") else block["variants"])
 
 
-def variant_config(config: Mapping, name: str) -> dict:
+def variant_config(config: Mapping, name: str, *, participants: int | None = None) -> dict:
     """The whole config of variant ``name``: its overlay on ``config``, validated.
 
-    ``simulation.participants`` becomes ``robustness.participants``; the ``robustness``
-    block itself is left out, so that a variant's config changes only with what its
-    jobs read.
+    ``simulation.participants`` becomes ``participants``, by default
+    ``robustness.participants``; the ``robustness`` and ``power`` blocks (the targets
+    that run variants) are left out, so that a variant's config changes only with what
+    its jobs read.
 
     Raises
     ------
@@ -104,6 +107,8 @@ def variant_config(config: Mapping, name: str) -> dict:
     >>> built = variant_config(config, "paper")
     >>> built["inference"]["preset"], built["simulation"]["participants"], "robustness" in built
     ('paper', 11, False)
+    >>> variant_config(config, "paper", participants=24)["simulation"]["participants"]
+    24
     """
     from casa_core.config import merge, validate_config
 
@@ -111,11 +116,12 @@ def variant_config(config: Mapping, name: str) -> dict:
     if name not in variants:
         known = ", ".join(variants)
         raise KeyError(f"robustness.variants: no variant {name!r} (variants: {known})")
-    built = copy.deepcopy({key: value for key, value in config.items() if key != "robustness"})
+    built = copy.deepcopy({k: v for k, v in config.items() if k not in RUNNING_BLOCKS})
     merge(built, variants[name])
-    built["simulation"]["participants"] = config["robustness"]["participants"]
+    built["simulation"]["participants"] = participants or config["robustness"]["participants"]
     validated = validate_config(built, source=f"robustness variant {name}")
-    validated.pop("robustness", None)
+    for block in RUNNING_BLOCKS:
+        validated.pop(block, None)
     return validated
 
 

@@ -92,10 +92,14 @@ def test_the_study_config_is_complete_and_ci_only_overlays_it():
     assert ci["robustness"]["variants"] == study["robustness"]["variants"]
     ci["simulation"]["participants"] = study["simulation"]["participants"]
     ci["robustness"] = study["robustness"]
+    # The power target in CI: N of 2 and 3, 2 replicates, the default variant.
+    assert ci["power"] == {**study["power"], "sizes": [2, 3], "replicates": 2}
+    ci["power"] = study["power"]
     assert ci == study
     assert yaml.safe_load(CI.read_text()) == {
         "simulation": {"participants": 3},
         "robustness": {"participants": 2, "run": ["default", "original"]},
+        "power": {"sizes": [2, 3], "replicates": 2},
     }
 
 

@@ -80,7 +80,7 @@ def test_a_variant_changes_only_its_overlay_and_keeps_the_seeds():
         undone = {**built, "inference": study["inference"]}
         undone["simulation"] = {**built["simulation"], "operator": study["simulation"]["operator"]}
         undone["simulation"]["participants"] = study["simulation"]["participants"]
-        expected = {key: value for key, value in study.items() if key != "robustness"}
+        expected = {k: v for k, v in study.items() if k not in variants.RUNNING_BLOCKS}
         assert undone == expected, name
         assert built["simulation"]["seed"] == study["simulation"]["seed"]
         assert built["inference"] == {**study["inference"], **overlay.get("inference", {})}
@@ -108,20 +108,27 @@ def _jobs(text: str) -> list[dict]:
     return jobs
 
 
-def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
+def dry_run(tmp_path, target: str):
+    """A copy of the workflow, the jobs of a dry run of ``target`` on the CI config, and
+    the count of each rule's jobs; no two jobs may write one path."""
     repo = copy_workflow(tmp_path / "wf")
-    result = snakemake(repo, "--dry-run", "robustness", "--configfile", "config/ci.yaml")
+    result = snakemake(repo, "--dry-run", target, "--configfile", "config/ci.yaml")
     assert result.returncode == 0, result.stdout + result.stderr
     jobs = _jobs(result.stdout)
-    counts = pd.Series([job["rule"] for job in jobs]).value_counts()
+    outputs = [path for job in jobs for path in job["output"]]
+    assert len(outputs) == len(set(outputs)), "two jobs write one path"
+    return repo, jobs, pd.Series([job["rule"] for job in jobs]).value_counts()
+
+
+def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
+    repo, jobs, counts = dry_run(tmp_path, "robustness")
     # ci.yaml: 2 variants x 2 participants; learning per participant and unknown task.
     assert counts["robustness_before"] == counts["robustness_after"] == 4
     assert counts["robustness_learn"] == 8
     assert counts["robustness_process"] == counts["robustness_claims"] == 2
     assert counts["robustness_case_study"] == 2
     assert counts["robustness_table"] == 1
-    outputs = [path for job in jobs for path in job["output"]]
-    assert len(outputs) == len(set(outputs)), "two jobs write one path"
+    assert counts["robustness_progress"] == 2  # a line after each variant
     for job in jobs:
         if job["rule"] == "robustness_table":
             continue
@@ -129,7 +136,8 @@ def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
             if f"/robustness/{name}/" in " ".join(job["output"]):
                 # Everything a variant's job writes, and the config it reads, is its own.
                 assert all(f"/robustness/{name}/" in path for path in job["output"]), job
-                if "--config" in job["shell"]:
+                # The progress line counts every variant's jobs: it reads the whole config.
+                if "--config" in job["shell"] and job["rule"] != "robustness_progress":
                     assert f"--config data/interim/robustness/{name}/config.yaml" in job["shell"]
                 if job["rule"] == "robustness_claims":
                     # C3 and the expert rows from the variant's own case study.

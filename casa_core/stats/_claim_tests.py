@@ -40,10 +40,16 @@ PAPER_BOUNDS = {
 
 @dataclass(frozen=True)
 class Check:
-    """One test of a hypothesis: whether it passed (None: undecided) and its numbers."""
+    """One test of a hypothesis: whether it passed (None: undecided) and its numbers.
+
+    ``metric`` and ``form`` (``paper`` or ``within``) say which metric and analysis it
+    belongs to (H1-H3; empty for H4's).
+    """
 
     passed: bool | None
     text: str
+    metric: str = ""
+    form: str = ""
 
 
 def _text(stats: pd.DataFrame) -> pd.DataFrame:
@@ -96,7 +102,8 @@ def _combine(form: str, metric: str, parts: list[tuple[bool | None, str]]) -> Ch
     # A failed part decides; an undecided one leaves the check undecided otherwise.
     passed = False if False in outcomes else None if None in outcomes else True
     verdict = {True: "pass", False: "fail", None: "undecided"}[passed]
-    return Check(passed, f"{metric} ({form}): {', '.join(t for _, t in parts)}: {verdict}")
+    text = f"{metric} ({form}): {', '.join(t for _, t in parts)}: {verdict}"
+    return Check(passed, text, metric, form)
 
 
 def superiority(stats, means, *, hypothesis, task, metric, better, worse) -> list[Check]:
@@ -135,7 +142,7 @@ def noninferiority(stats, *, hypothesis, task, metric, new, reference) -> list[C
         name = f"{metric} {task} non-inferior to {reference} ({form})"
         row = rows[rows["note"].str.contains("paired") == paired]
         if row.empty or not np.isfinite(row["ci_high"].iloc[0]):
-            checks.append(Check(None, f"{name}: bound not computed: undecided"))
+            checks.append(Check(None, f"{name}: bound not computed: undecided", metric, form))
             continue
         bound = float(row["ci_high"].iloc[0])
         flag = _noninferior_flag(row["noninferior"].iloc[0])
@@ -145,9 +152,10 @@ def noninferiority(stats, *, hypothesis, task, metric, new, reference) -> list[C
             margin = PAPER_BOUNDS[(task, metric)]
             flag, text = bound < margin, f"bound {bound:.3g} vs the paper's {margin:g}"
         else:
-            checks.append(Check(None, f"{name}: bound {bound:.3g}, no margin: undecided"))
+            text = f"{name}: bound {bound:.3g}, no margin: undecided"
+            checks.append(Check(None, text, metric, form))
             continue
-        checks.append(Check(flag, f"{name}: {text}: {'pass' if flag else 'fail'}"))
+        checks.append(Check(flag, f"{name}: {text}: {'pass' if flag else 'fail'}", metric, form))
     return checks
 
 

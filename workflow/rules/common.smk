@@ -1,11 +1,13 @@
 # Config validation, the study's vocabulary, dataset discovery and the list of outputs.
 # No rules here.
+import functools
 import os
 import re
 import sys
 from pathlib import Path
 
 from casa_core import config as casa_config
+from casa_core import power as casa_power
 from casa_core import variants as casa_variants
 from casa_core import vocabulary
 from casa_core.io.atomic import atomic_write_text
@@ -54,10 +56,12 @@ CASE_STUDY = config["simulate"]
 RAW = Path("data/raw")
 PROCESSED = Path("data/processed")
 FIGURES = Path("figures")
+# The jobs' Snakemake benchmark files (their times), read by `casa progress`.
+BENCHMARKS = Path("benchmarks")
 # Dataset names become folder and file names: keep them portable.
 DATASET_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 # Outputs of the dataset-independent rules live here; no dataset may take the name.
-RESERVED = ("case_study", "robustness")
+RESERVED = ("case_study", "robustness", "power")
 # The tasks whose intents the simulated participants teach (workflow/rules/study.smk).
 UNKNOWN_TASKS = vocabulary.UNKNOWN_TASKS
 # Datasets that rules of this workflow write into data/raw (the simulated study).
@@ -224,8 +228,12 @@ VARIANT_CONFIGS = {
 }
 
 
+# The power target's variants (workflow/rules/power.smk) may be others of robustness.variants.
+POWER_VARIANTS = casa_power.power_variants(config)
+
+
 wildcard_constraints:
-    variant="|".join(re.escape(v) for v in VARIANTS) or "(?!)",
+    variant="|".join(re.escape(v) for v in dict.fromkeys(VARIANTS + POWER_VARIANTS)) or "(?!)",
 
 
 def variant_config_input(wildcards):
@@ -238,3 +246,36 @@ def margin_options(wildcards=None):
     from casa_core.stats.margins import Margins
 
     return " ".join(Margins.from_config(config["statistics"]).options())
+
+
+# The power target (workflow/rules/power.smk; casa_core/power.py): replicate studies of
+# each variant of power.variants, each with its own seed.
+POWER_INTERIM = Path("data/interim/power")
+POWER = PROCESSED / "power"
+POWER_BENCHMARKS = BENCHMARKS / "power"
+POWER_SIZES = casa_power.power_sizes(config)
+POWER_PARTICIPANTS = list(range(1, max(POWER_SIZES) + 1))
+POWER_REPLICATES = list(range(1, config["power"]["replicates"] + 1))
+# A replicate's folder, benchmark folder (its jobs' times, for casa progress) and logs.
+REPLICATE = POWER_INTERIM / "{variant}" / "r{r}"
+REPLICATE_BENCHMARKS = POWER_BENCHMARKS / "{variant}" / "r{r}"
+REPLICATE_LOGS = "logs/power/{variant}/r{r}"
+# Each variant's config for the power target, computed once (replicates differ in seed).
+POWER_VARIANT_CONFIGS = {
+    name: casa_power.power_variant_config(config, name) for name in POWER_VARIANTS
+}
+
+
+@functools.cache
+def replicate_config_file(variant, r):
+    """Replicate r's config file, written the first time a job of it is planned."""
+    settings = casa_power.replicate_config(POWER_VARIANT_CONFIGS[variant], int(r))
+    return effective_config_file(POWER_INTERIM / variant / f"r{r}" / "config.yaml", settings)
+
+
+def replicate_config_input(wildcards):
+    return replicate_config_file(wildcards.variant, wildcards.r)
+
+
+wildcard_constraints:
+    r=r"\d+",

@@ -3,6 +3,12 @@
 # Each variant has its own config, logs, intents and tables below
 # data/interim/robustness/<variant> and data/processed/robustness/<variant>: variants
 # share nothing they write, and the same seeds. Not part of the default target.
+# Each job's time goes to its benchmark file; after each variant a line of progress
+# (variants done, time per variant, time left: casa progress) is printed and appended
+# to data/processed/robustness/progress.log.
+ROBUST_BENCHMARKS = BENCHMARKS / "robustness"
+
+
 rule robustness_before:
     input:
         config=variant_config_input,
@@ -11,6 +17,8 @@ rule robustness_before:
         directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before"),
     log:
         "logs/robustness/{variant}/p{p}_before.log",
+    benchmark:
+        ROBUST_BENCHMARKS / "{variant}" / "p{p}_before.tsv"
     conda:
         "../envs/casa.yaml"
     shell:
@@ -28,6 +36,8 @@ rule robustness_learn:
         timing=ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}_timing.csv",
     log:
         "logs/robustness/{variant}/p{p}_{task}_learn.log",
+    benchmark:
+        ROBUST_BENCHMARKS / "{variant}" / "p{p}_{task}_learn.tsv"
     conda:
         "../envs/casa.yaml"
     shell:
@@ -47,6 +57,8 @@ rule robustness_after:
         directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "after"),
     log:
         "logs/robustness/{variant}/p{p}_after.log",
+    benchmark:
+        ROBUST_BENCHMARKS / "{variant}" / "p{p}_after.tsv"
     conda:
         "../envs/casa.yaml"
     params:
@@ -70,6 +82,8 @@ rule robustness_process:
         likert=ROBUST / "{variant}" / "likert.csv",
     log:
         "logs/robustness/{variant}/process.log",
+    benchmark:
+        ROBUST_BENCHMARKS / "{variant}" / "process.tsv"
     conda:
         "../envs/casa.yaml"
     params:
@@ -89,6 +103,8 @@ rule robustness_stats:
         md=ROBUST / "{variant}" / "stats.md",
     log:
         "logs/robustness/{variant}/stats.log",
+    benchmark:
+        ROBUST_BENCHMARKS / "{variant}" / "stats.tsv"
     conda:
         "../envs/casa.yaml"
     params:
@@ -110,6 +126,8 @@ rule robustness_case_study:
         work=directory(ROBUST_INTERIM / "{variant}" / "case_study"),
     log:
         "logs/robustness/{variant}/case_study.log",
+    benchmark:
+        ROBUST_BENCHMARKS / "{variant}" / "case_study.tsv"
     conda:
         "../envs/casa.yaml"
     shell:
@@ -130,6 +148,8 @@ rule robustness_claims:
         ROBUST / "{variant}" / "claims.csv",
     log:
         "logs/robustness/{variant}/claims.log",
+    benchmark:
+        ROBUST_BENCHMARKS / "{variant}" / "claims.tsv"
     conda:
         "../envs/casa.yaml"
     params:
@@ -160,6 +180,29 @@ rule robustness_table:
         "--out-md {output.md} --figure {params.stem} > {log} 2>&1"
 
 
+# On the machine running Snakemake, so that the line shows beside Snakemake's own.
+localrules:
+    robustness_progress,
+
+
+rule robustness_progress:
+    input:
+        ROBUST / "{variant}" / "claims.csv",
+    output:
+        ROBUST_INTERIM / "{variant}" / "progress.txt",
+    log:
+        "logs/robustness/{variant}/progress.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        config=CONFIG_FILE,
+        log=ROBUST / "progress.log",
+    shell:
+        "exec casa progress robustness --config {params.config} --done {wildcards.variant} "
+        "--out {output} --append {params.log} 2> {log}"
+
+
 rule robustness:
     input:
         rules.robustness_table.output,
+        expand(ROBUST_INTERIM / "{variant}" / "progress.txt", variant=VARIANTS),

@@ -1,0 +1,158 @@
+# `snakemake --cores all power`: simulated power of H1-H3 (docs/power.md). For each
+# variant of power.variants and each replicate r of power.replicates, the simulated
+# study with its own seed (casa_core.power.replicate_seed) and as many participants as
+# the largest N of power.sizes; its study of N is its first N participants. Each
+# participant's stages are the robustness target's jobs (workflow/rules/robustness.smk)
+# on the replicate's config, so the DAG spreads over a cluster one participant stage a
+# job. Logs, intents and the steps table are temporary: a replicate keeps its
+# trials.csv and detections.csv. Not part of the default target.
+use rule robustness_before as power_before with:
+    input:
+        config=replicate_config_input,
+        scene=config["scene"],
+    output:
+        temp(directory(REPLICATE / "raw" / "p{p}" / "before")),
+    log:
+        f"{REPLICATE_LOGS}/p{{p}}_before.log",
+    benchmark:
+        REPLICATE_BENCHMARKS / "p{p}_before.tsv"
+
+
+use rule robustness_learn as power_learn with:
+    input:
+        before=REPLICATE / "raw" / "p{p}" / "before",
+        config=replicate_config_input,
+    output:
+        library=temp(directory(REPLICATE / "intents" / "p{p}" / "{task}")),
+        row=REPLICATE / "learning" / "p{p}_{task}.csv",
+        timing=REPLICATE / "learning" / "p{p}_{task}_timing.csv",
+    log:
+        f"{REPLICATE_LOGS}/p{{p}}_{{task}}_learn.log",
+    benchmark:
+        REPLICATE_BENCHMARKS / "p{p}_{task}_learn.tsv"
+
+
+use rule robustness_after as power_after with:
+    input:
+        before=REPLICATE / "raw" / "p{p}" / "before",
+        config=replicate_config_input,
+        libraries=expand(
+            REPLICATE / "intents" / "p{p}" / "{task}", task=UNKNOWN_TASKS, allow_missing=True
+        ),
+    output:
+        temp(directory(REPLICATE / "raw" / "p{p}" / "after")),
+    log:
+        f"{REPLICATE_LOGS}/p{{p}}_after.log",
+    benchmark:
+        REPLICATE_BENCHMARKS / "p{p}_after.tsv"
+    params:
+        library=lambda wildcards: POWER_INTERIM
+        / wildcards.variant
+        / f"r{wildcards.r}"
+        / "intents"
+        / f"p{wildcards.p}",
+
+
+use rule robustness_process as power_process with:
+    input:
+        logs=expand(
+            REPLICATE / "raw" / "p{p}" / "{stage}",
+            p=POWER_PARTICIPANTS,
+            stage=("before", "after"),
+            allow_missing=True,
+        ),
+        scene=config["scene"],
+    output:
+        trials=REPLICATE / "trials.csv",
+        steps=temp(REPLICATE / "steps.csv"),
+        likert=temp(REPLICATE / "likert.csv"),
+    log:
+        f"{REPLICATE_LOGS}/process.log",
+    benchmark:
+        REPLICATE_BENCHMARKS / "process.tsv"
+    params:
+        raw=lambda wildcards: POWER_INTERIM / wildcards.variant / f"r{wildcards.r}" / "raw",
+        out=lambda wildcards: POWER_INTERIM / wildcards.variant / f"r{wildcards.r}",
+
+
+# Per N of power.sizes, whether the replicate's first N participants detect each of
+# H1-H3 on each metric, in the paper's form and within subjects (casa_core.stats.power).
+rule power_detect:
+    input:
+        trials=REPLICATE / "trials.csv",
+        config=replicate_config_input,
+    output:
+        REPLICATE / "detections.csv",
+    log:
+        f"{REPLICATE_LOGS}/detect.log",
+    benchmark:
+        REPLICATE_BENCHMARKS / "detect.tsv"
+    conda:
+        "../envs/casa.yaml"
+    params:
+        sizes=" ".join(map(str, POWER_SIZES)),
+    shell:
+        "exec casa power detect --config {input.config} --trials {input.trials} "
+        "--variant {wildcards.variant} --replicate {wildcards.r} --sizes {params.sizes} "
+        "--out {output} > {log} 2>&1"
+
+
+# After each replicate, a line of progress (replicates done, time per replicate, time
+# left), printed beside Snakemake's own and appended to data/processed/power/progress.log;
+# on the machine running Snakemake, so that the line shows there.
+localrules:
+    power_progress,
+
+
+rule power_progress:
+    input:
+        REPLICATE / "detections.csv",
+    output:
+        REPLICATE / "progress.txt",
+    log:
+        f"{REPLICATE_LOGS}/progress.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        config=CONFIG_FILE,
+        log=POWER / "progress.log",
+    shell:
+        "exec casa progress power --config {params.config} "
+        "--done {wildcards.variant}/r{wildcards.r} --out {output} --append {params.log} "
+        "2> {log}"
+
+
+rule power_table:
+    input:
+        expand(REPLICATE / "detections.csv", variant=POWER_VARIANTS, r=POWER_REPLICATES),
+    output:
+        POWER / "power.csv",
+    log:
+        "logs/power/table.log",
+    conda:
+        "../envs/casa.yaml"
+    shell:
+        "exec casa power table --detections {input} --out {output} > {log} 2>&1"
+
+
+rule power_figure:
+    input:
+        POWER / "power.csv",
+    output:
+        pdf=FIGURES / "power.pdf",
+        png=FIGURES / "power.png",
+    log:
+        "logs/power/figure.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        stem=FIGURES / "power",
+    shell:
+        "exec casa power figure --power {input} --out {params.stem} > {log} 2>&1"
+
+
+rule power:
+    input:
+        rules.power_table.output,
+        rules.power_figure.output,
+        expand(REPLICATE / "progress.txt", variant=POWER_VARIANTS, r=POWER_REPLICATES),
