@@ -11,7 +11,7 @@ from casa_core._checks import require_positive
 from casa_core.intents import COST_FORMS, GoalIntent
 from casa_core.learning.features import bounded_cost, cost_logits, feature_names, object_positions
 from casa_core.learning.numpy_cost import NumpyStateCost
-from casa_core.planning import PlannedIntent, PlannerConfig
+from casa_core.planning import Plan, PlannedIntent, PlannerConfig
 
 
 class NeuralIntent(PlannedIntent):
@@ -146,4 +146,6 @@ def calibrate(intent: NeuralIntent, start, *, cost: str) -> tuple[NeuralIntent, 
         guides=intent.guides,
         cost_offset=intent.cost_offset * factor,
     )
+    # The calibrated cost is the learned one times factor > 0: the same optimum.
+    calibrated.seed_plan(start, planner.horizon, Plan(plan.states, plan.costs * factor, 0))
     return calibrated, factor

@@ -131,6 +131,18 @@ class PlannedIntent(Intent):
             self._latest = (n, result.states[0])
         return result
 
+    def seed_plan(self, state, time_left: float, plan: Plan) -> None:
+        """Take ``plan`` as the optimal trajectory from ``state`` (as if :meth:`plan` had).
+
+        For a cost known to be a positive multiple of one already planned (a calibrated
+        learned cost): its optimum is the same trajectory, its cost the multiple.
+        """
+        state = np.asarray(state, dtype=float).reshape(4)
+        n = steps_left(time_left, self.dt)
+        self._remember((state.tobytes(), n), plan)
+        if n > 0:
+            self._latest = (n, plan.states[0])
+
     def _remember(self, key: tuple, plan: Plan) -> None:
         self._cache[key] = plan
         if len(self._cache) > self._cache_size:
