@@ -87,6 +87,11 @@ class NumpyStateCost:
         self._w1t, self._w2t = self._w1.T.contiguous(), self._w2.T.contiguous()
         self.objects = np.asarray(objects, dtype=float).reshape(-1, 3)
         self.length_scale = float(length_scale)
+        k = len(self.objects)
+        # d features / d position of the linear features (position, then each offset).
+        self._linear_jacobian = np.vstack([np.eye(3)] + [-np.eye(3)] * k) / self.length_scale
+        self._distance_columns = slice(12 + 3 * k, 12 + 4 * k)
+        self._rotation_basis = np.column_stack([_A, _B])
         self.cost_scale = float(cost_scale)
         self.offset = float(offset)
 
@@ -97,26 +102,22 @@ class NumpyStateCost:
         states = np.asarray(states, dtype=float)
         shape = states.shape[:-1]
         flat = states.reshape(-1, 4)
-        n, k, ls = len(flat), len(self.objects), self.length_scale
+        n, k = len(flat), len(self.objects)
         cos, sin = np.cos(flat[:, 3:4]), np.sin(flat[:, 3:4])
-        # Per axis (n, K) rather than (n, K, 3): numpy is slow on short last axes.
-        offsets = [self.objects[:, axis] - flat[:, axis : axis + 1] for axis in range(3)]
-        distances = np.sqrt(
-            offsets[0] * offsets[0] + offsets[1] * offsets[1] + offsets[2] * offsets[2] + 1e-6
-        )
+        offsets = self.objects[None, :, :] - flat[:, None, :3]  # (n, K, 3), feature order
+        dx, dy, dz = offsets[..., 0], offsets[..., 1], offsets[..., 2]
+        distances = np.sqrt(dx * dx + dy * dy + dz * dz + 1e-6)
         inputs = np.empty((n, 12 + 4 * k), dtype=np.float32)
         inputs[:, :9] = cos * _A + sin * _B + _C
-        inputs[:, 9:12] = flat[:, :3] / ls
-        for axis in range(3):
-            inputs[:, 12 + axis : 12 + 3 * k : 3] = offsets[axis] / ls
-        inputs[:, 12 + 3 * k :] = distances / ls
+        lengths = np.concatenate([flat[:, :3], offsets.reshape(n, 3 * k), distances], axis=1)
+        inputs[:, 9:] = lengths / self.length_scale
         with torch.inference_mode():
             h1 = torch.addmm(self._b1, torch.from_numpy(inputs), self._w1t)
             h2 = torch.addmm(self._b2, self._leaky(h1), self._w2t)
             logits = torch.mv(self._leaky(h2), self._w3).add_(self._b3).numpy()
         sigmoid = 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
         values = (self.cost_scale * sigmoid - self.offset).reshape(shape)
-        cache = (shape, cos, sin, offsets, distances, h1, h2, sigmoid)
+        cache = (shape, cos, sin, flat[:, :3], distances, h1, h2, sigmoid)
         return values, cache
 
     def __call__(self, states) -> np.ndarray:
@@ -125,19 +126,21 @@ class NumpyStateCost:
 
     def value_and_grad(self, states) -> tuple[np.ndarray, np.ndarray]:
         """Per-state costs ``(...)`` and the gradient of their sum in the states ``(..., 4)``."""
-        values, (shape, cos, sin, offsets, distances, h1, h2, sigmoid) = self._forward(states)
-        d_logits = torch.from_numpy((self.cost_scale * sigmoid * (1.0 - sigmoid)).astype(np.float32))
+        values, (shape, cos, sin, position, distances, h1, h2, sigmoid) = self._forward(states)
+        slope_of_sigmoid = self.cost_scale * sigmoid * (1.0 - sigmoid)
+        d_logits = torch.from_numpy(slope_of_sigmoid.astype(np.float32))
         with torch.inference_mode():
             d_h2 = torch.outer(d_logits, self._w3)
             d_h2 = torch.where(h2 > 0, d_h2, d_h2 * self._slope)
             d_h1 = d_h2.mm(self._w2)
             d_h1 = torch.where(h1 > 0, d_h1, d_h1 * self._slope)
             d_inputs = d_h1.mm(self._w1).numpy().astype(np.float64)
-        k, ls = len(self.objects), self.length_scale
-        along = d_inputs[:, 12 + 3 * k :] / (ls * distances)  # d cost / d distance, over it
+        # The features' gradient as products with constant matrices (few numpy calls).
+        along = d_inputs[:, self._distance_columns] / (self.length_scale * distances)
         grad = np.empty((len(d_inputs), 4))
-        for axis in range(3):
-            d_offset = d_inputs[:, 12 + axis : 12 + 3 * k : 3] / ls + along * offsets[axis]
-            grad[:, axis] = d_inputs[:, 9 + axis] / ls - d_offset.sum(axis=1)
-        grad[:, 3] = (d_inputs[:, :9] * (cos * _B - sin * _A)).sum(axis=1)
+        # Position: its own columns and the offsets' (linear), then the distances'.
+        grad[:, :3] = d_inputs[:, 9 : self._distance_columns.start] @ self._linear_jacobian
+        grad[:, :3] -= along @ self.objects - position * along.sum(axis=1, keepdims=True)
+        turned = d_inputs[:, :9] @ self._rotation_basis  # (d R . A, d R . B)
+        grad[:, 3] = cos[:, 0] * turned[:, 1] - sin[:, 0] * turned[:, 0]
         return values, grad.reshape(*shape, 4)

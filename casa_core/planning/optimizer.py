@@ -156,6 +156,8 @@ def feasible(starts: np.ndarray, targets: np.ndarray, limit: str) -> np.ndarray:
     axis (``limit="axis"``) or its position part scaled to norm <= 1 and its rot
     clipped (``limit="norm"``). States that are already feasible come back unchanged.
     """
+    if limit == "axis" and len(targets) <= _PYTHON_WALK_ROWS:
+        return _walk_axis(np.asarray(starts, dtype=float), targets)
     # Time first and contiguous: each step's ufuncs then run on one block of memory.
     by_time = np.ascontiguousarray(np.swapaxes(targets, 0, 1))
     out = np.empty_like(by_time)
@@ -172,6 +174,32 @@ def feasible(starts: np.ndarray, targets: np.ndarray, limit: str) -> np.ndarray:
             step[:, 3] = np.minimum(np.maximum(step[:, 3], -1.0), 1.0)
         previous = np.add(previous, step, out=out[t])
     return np.ascontiguousarray(np.swapaxes(out, 0, 1))
+
+
+#: Up to this many rows the axis-limited walk runs on Python floats: for a few short
+#: rows, numpy's per-call overhead costs more than the arithmetic (the same result).
+_PYTHON_WALK_ROWS = 3
+
+
+def _walk_axis(starts: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """:func:`feasible` with ``limit="axis"`` on Python floats, row by row (bit for bit)."""
+    out = np.empty_like(targets)
+    for row, (start, target) in enumerate(zip(starts.tolist(), targets.tolist(), strict=True)):
+        x, y, z, r = start
+        walked = []
+        for tx, ty, tz, tr in target:
+            # previous + clip(target - previous, -1, 1), per axis, as the numpy walk.
+            s = tx - x
+            x = x + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            s = ty - y
+            y = y + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            s = tz - z
+            z = z + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            s = tr - r
+            r = r + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            walked.append((x, y, z, r))
+        out[row] = walked
+    return out
 
 
 def warm_start_from(states: np.ndarray, n_done: int, n_steps: int) -> np.ndarray:

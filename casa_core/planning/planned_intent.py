@@ -109,7 +109,9 @@ class PlannedIntent(Intent):
         if self._latest is not None and 0 < n <= self._latest[0]:
             previous_n, previous_states = self._latest
             warm = warm_start_from(previous_states[None], previous_n - n, n)
-            result = optimize(self.planning_cost, state[None], n, config=self.planner, warm_start=warm)
+            result = optimize(
+                self.planning_cost, state[None], n, config=self.planner, warm_start=warm
+            )
         elif self.guides and n > 0:
             stay = np.repeat(state[None, None, :], n, axis=1)
             guesses = [warm_start_from(g[None], 0, n) for g in self.guides]
