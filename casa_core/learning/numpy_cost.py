@@ -47,6 +47,10 @@ _B = np.stack([R0[:, 1], -R0[:, 0], _ZERO], axis=-1).reshape(9)
 _C = np.stack([_ZERO, _ZERO, R0[:, 2]], axis=-1).reshape(9)
 
 
+_leaky_relu = torch.nn.functional.leaky_relu
+_leaky_relu_backward = torch.ops.aten.leaky_relu_backward
+
+
 def _linear_layers(network: torch.nn.Module) -> tuple[list, float]:
     """``[(W, b), ...]`` (detached float32 copies) of the 3 linear layers and the leaky slope."""
     modules = list(network)
@@ -95,9 +99,6 @@ class NumpyStateCost:
         self.cost_scale = float(cost_scale)
         self.offset = float(offset)
 
-    def _leaky(self, x: torch.Tensor) -> torch.Tensor:
-        return torch.nn.functional.leaky_relu(x, self._slope)
-
     def _forward(self, states: np.ndarray):
         states = np.asarray(states, dtype=float)
         shape = states.shape[:-1]
@@ -111,10 +112,10 @@ class NumpyStateCost:
         inputs[:, :9] = cos * _A + sin * _B + _C
         lengths = np.concatenate([flat[:, :3], offsets.reshape(n, 3 * k), distances], axis=1)
         inputs[:, 9:] = lengths / self.length_scale
-        with torch.inference_mode():
-            h1 = torch.addmm(self._b1, torch.from_numpy(inputs), self._w1t)
-            h2 = torch.addmm(self._b2, self._leaky(h1), self._w2t)
-            logits = torch.mv(self._leaky(h2), self._w3).add_(self._b3).numpy()
+        # No autograd context needed: neither the weights nor the inputs require grad.
+        h1 = torch.addmm(self._b1, torch.from_numpy(inputs), self._w1t)
+        h2 = torch.addmm(self._b2, _leaky_relu(h1, self._slope), self._w2t)
+        logits = torch.addmv(self._b3, _leaky_relu(h2, self._slope), self._w3).numpy()
         sigmoid = 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
         values = (self.cost_scale * sigmoid - self.offset).reshape(shape)
         cache = (shape, cos, sin, flat[:, :3], distances, h1, h2, sigmoid)
@@ -129,12 +130,10 @@ class NumpyStateCost:
         values, (shape, cos, sin, position, distances, h1, h2, sigmoid) = self._forward(states)
         slope_of_sigmoid = self.cost_scale * sigmoid * (1.0 - sigmoid)
         d_logits = torch.from_numpy(slope_of_sigmoid.astype(np.float32))
-        with torch.inference_mode():
-            d_h2 = torch.outer(d_logits, self._w3)
-            d_h2 = torch.where(h2 > 0, d_h2, d_h2 * self._slope)
-            d_h1 = d_h2.mm(self._w2)
-            d_h1 = torch.where(h1 > 0, d_h1, d_h1 * self._slope)
-            d_inputs = d_h1.mm(self._w1).numpy().astype(np.float64)
+        # The network's backward pass, as autograd computes it.
+        d_h2 = _leaky_relu_backward(torch.outer(d_logits, self._w3), h2, self._slope, False)
+        d_h1 = _leaky_relu_backward(d_h2.mm(self._w2), h1, self._slope, False)
+        d_inputs = d_h1.mm(self._w1).numpy().astype(np.float64)
         # The features' gradient as products with constant matrices (few numpy calls).
         along = d_inputs[:, self._distance_columns] / (self.length_scale * distances)
         grad = np.empty((len(d_inputs), 4))
