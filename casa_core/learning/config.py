@@ -78,9 +78,11 @@ class IRLConfig:
         mean start); the one whose own optimum ends closest is returned.
     assist_warm_iterations : int
         Warm-started iterations of the learned intent's planner per assistance
-        step (its ``warm_iterations``): one iteration costs about 0.15 ms with the
-        128-unit network (casa_core.learning.numpy_cost), and an assistance step has
-        about 2 ms.
+        step (its ``warm_iterations``). Default 10 (15 before the speed targets): an
+        assistance step has about 2 ms, one iteration costs about 0.15 ms with the
+        128-unit network (:mod:`casa_core.learning.numpy_cost`), and the after-learning
+        trials of the simulated participants changed by less than their own spread
+        with 10 (docs/departures.md, "Learning a new intent").
     planner : PlannerConfig
         The trajectory optimizer used for D^phi and (with
         ``assist_warm_iterations``) by the learned intent.
@@ -98,7 +100,7 @@ class IRLConfig:
     logit_penalty: float = 0.01
     min_iterations: int = 15
     explore_iterations: int = 100
-    assist_warm_iterations: int = 15
+    assist_warm_iterations: int = 10
     verify_candidates: int = 5
     tol_gap: float = 0.005
     tol_end: float = 0.005
