@@ -111,7 +111,8 @@ class NumpyStateCost:
         inputs = np.empty((n, 12 + 4 * k), dtype=np.float32)
         inputs[:, :9] = cos * _A + sin * _B + _C
         lengths = np.concatenate([flat[:, :3], offsets.reshape(n, 3 * k), distances], axis=1)
-        inputs[:, 9:] = lengths / self.length_scale
+        with np.errstate(over="ignore"):  # beyond float32's range: inf, as torch casts it
+            inputs[:, 9:] = lengths / self.length_scale
         # No autograd context needed: neither the weights nor the inputs require grad.
         h1 = torch.addmm(self._b1, torch.from_numpy(inputs), self._w1t)
         h2 = torch.addmm(self._b2, _leaky_relu(h1, self._slope), self._w2t)
