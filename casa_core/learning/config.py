@@ -78,11 +78,11 @@ class IRLConfig:
         mean start); the one whose own optimum ends closest is returned.
     assist_warm_iterations : int
         Warm-started iterations of the learned intent's planner per assistance
-        step (its ``warm_iterations``). Default 10 (15 before the speed targets): an
-        assistance step has about 2 ms, one iteration costs about 0.15 ms with the
-        128-unit network (:mod:`casa_core.learning.numpy_cost`), and the after-learning
-        trials of the simulated participants changed by less than their own spread
-        with 10 (docs/departures.md, "Learning a new intent").
+        step (its ``warm_iterations``). Default 10: an assistance step has about
+        2 ms, one iteration costs about 0.15 ms with the 128-unit network
+        (:mod:`casa_core.learning.numpy_cost`), and with 10 instead of 15 the trials
+        after learning of simulated participants differ by less than participants do
+        (docs/departures.md, "Learning a new intent").
     planner : PlannerConfig
         The trajectory optimizer used for D^phi and (with
         ``assist_warm_iterations``) by the learned intent.
