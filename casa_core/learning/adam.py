@@ -32,8 +32,8 @@ class Adam:
     >>> adam = Adam([weight], lr=0.1, weight_decay=0.0)
     >>> (weight**2).sum().backward()
     >>> adam.step()
-    >>> weight.detach().tolist()  # the first step moves each weight by lr against its gradient
-    [0.8999999761581421, -1.899999976158142]
+    >>> [round(w, 6) for w in weight.detach().tolist()]  # lr against the gradient's sign
+    [0.9, -1.9]
     """
 
     def __init__(self, params, *, lr: float, weight_decay: float, betas=(0.9, 0.999), eps=1e-8):

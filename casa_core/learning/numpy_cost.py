@@ -28,7 +28,7 @@ Examples
 ...         length_scale=0.1,
 ...     ),
 ...     10.0,
-... ).numpy()
+... ).detach().numpy()
 >>> values.shape, grad.shape, bool(np.allclose(values, reference, rtol=1e-5))
 ((1, 2), (1, 2, 4), True)
 """
