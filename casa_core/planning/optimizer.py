@@ -310,8 +310,8 @@ def optimize(
             per_state, grad = value_and_grad(states_u * scale)
             row_costs, grad = per_state.sum(axis=1), grad * scale
         improved = row_costs < best_cost
-        best_cost[improved] = row_costs[improved]
-        best_u[improved] = states_u[improved]
+        np.copyto(best_cost, row_costs, where=improved)
+        np.copyto(best_u, states_u, where=improved[:, None, None])
         squared = grad * grad
         if config.limit == "norm":
             squared[..., :3] = squared[..., :3].mean(axis=-1, keepdims=True)
