@@ -164,4 +164,5 @@ def _alpha_distance(distance, D):
 
 def _alpha_belief(p_star, n_intents):
     """:func:`alpha_belief` on checked input (n_intents >= 2; 1 intent gives alpha = 1)."""
-    return np.clip(1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0), 0.0, 1.0)
+    # np.clip's arithmetic (maximum, then minimum) without its overhead on a scalar.
+    return np.minimum(np.maximum(1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0), 0.0), 1.0)

@@ -41,6 +41,7 @@ from casa_core.defaults import (
     K,
 )
 from casa_core.inference import _log_likelihood, _posterior
+from casa_core.intents import length
 from casa_core.vocabulary import EVIDENCE
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
@@ -334,10 +335,10 @@ class Assistant:
         target = self._plan[index]
         remaining = max(self.dt - elapsed_in_step, self.dt / 10)
         velocity = (target - state) / remaining
-        norm = np.linalg.norm(velocity[:3])
+        norm = length(velocity[:3])
         if norm > self.speed:
             velocity[:3] *= self.speed / norm
-        velocity[3] = np.clip(velocity[3], -self.rot_speed, self.rot_speed)
+        velocity[3] = min(max(velocity[3], -self.rot_speed), self.rot_speed)  # np.clip's order
         return velocity
 
     def act(

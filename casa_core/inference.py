@@ -100,6 +100,8 @@ def _posterior(logs: np.ndarray) -> np.ndarray:
     top = np.where(np.isfinite(top), top, 0.0)
     weights = np.exp(logs - top)
     total = weights.sum(axis=-1, keepdims=True)
+    if (total > 0).all():  # the usual case: the same quotient, without the uniform fallback
+        return weights / total
     uniform = np.full_like(weights, 1.0 / weights.shape[-1])
     with np.errstate(invalid="ignore"):
         return np.where(total > 0, weights / total, uniform)

@@ -11,6 +11,7 @@ that the robot assists along.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 
 import numpy as np
@@ -19,6 +20,20 @@ from casa_core._checks import require_positive
 from casa_core.defaults import COST_PER_METRE, DT, SPEED
 
 COST_FORMS = ("path_length", "distance_sum")
+
+
+def length(vector: np.ndarray) -> float:
+    """Euclidean length of a 1-D float array, as ``numpy.linalg.norm`` computes it.
+
+    The same formula (the square root of ``vector.dot(vector)``) without the general
+    function's overhead, which the assistance step pays a dozen times.
+
+    Examples
+    --------
+    >>> length(np.array([0.3, 0.4, 0.0]))
+    0.5
+    """
+    return math.sqrt(vector.dot(vector))
 
 
 class Intent(ABC):
@@ -156,8 +171,8 @@ class GoalIntent(Intent):
         1.7320508075688772
         """
         if self.cost == "path_length":
-            return self.scale * float(np.linalg.norm(state_to[:3] - state_from[:3]))
-        return self.scale * self.dt * float(np.linalg.norm(state_to[:3] - self.goal))
+            return self.scale * length(state_to[:3] - state_from[:3])
+        return self.scale * self.dt * length(state_to[:3] - self.goal)
 
     def cost_to_go(self, state, time_left: float) -> float:
         """C(xi*_{t->T}) in closed form (see the class docstring for both cost forms).
@@ -170,7 +185,7 @@ class GoalIntent(Intent):
         >>> green.cost_to_go(np.zeros(4), 0.0)  # whatever the time left
         0.5
         """
-        d = float(np.linalg.norm(np.asarray(state[:3], dtype=float) - self.goal))
+        d = length(np.asarray(state[:3], dtype=float) - self.goal)
         if self.cost == "path_length":
             return self.scale * d
         n = int(np.floor(max(float(time_left), 0.0) / self.dt + 1e-9))
@@ -183,7 +198,7 @@ class GoalIntent(Intent):
         state = np.asarray(state, dtype=float)
         n = int(np.floor(max(float(time_left), 0.0) / self.dt + 1e-9))
         offset = self.goal - state[:3]
-        d = float(np.linalg.norm(offset))
+        d = length(offset)
         travelled = np.minimum(self.speed * self.dt * np.arange(n + 1), d)
         direction = offset / d if d > 0 else np.zeros(3)
         positions = state[:3] + travelled[:, None] * direction
@@ -191,4 +206,4 @@ class GoalIntent(Intent):
 
     def distance(self, state) -> float:
         """Euclidean distance (m) from the end effector to the goal."""
-        return float(np.linalg.norm(np.asarray(state[:3], dtype=float) - self.goal))
+        return length(np.asarray(state[:3], dtype=float) - self.goal)

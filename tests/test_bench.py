@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from casa_core import bench
+from casa_core import bench, bench_protocol
 from casa_core.scene import load_scene
 
 
@@ -97,6 +97,39 @@ def test_table_marks_unassisted_rows_and_fits_without_them():
 def test_table_explains_three_goals_no_faster_than_four():
     table = bench.format_table(scaling_results(131.0, 130.0))
     assert "3 goal intents took no less than 4 (131.0 vs 130.0 us)" in table
+
+
+def test_targets_are_the_speed_targets_and_each_is_judged():
+    # The speed targets of the power analysis: a participant's protocol in 5 CPU s,
+    # an intent learned in 2, trials at 300x, assistance steps in 2 ms and 100 us.
+    assert bench_protocol.TARGETS == {
+        "participant_cpu_s": ("<=", 5.0),
+        "irl_s": ("<=", 2.0),
+        "trial_realtime_factor": (">=", 300.0),
+        "step_us_neural1": ("<=", 2000.0),
+        "step_us_goal3": ("<=", 100.0),
+    }
+    assert bench_protocol.target_met("step_us_goal3", 100.0) is True
+    assert bench_protocol.target_met("step_us_goal3", 100.5) is False
+    assert bench_protocol.target_met("trial_realtime_factor", 299.0) is False
+    assert bench_protocol.target_met("scaling", 1.0) is None
+
+
+def test_table_says_which_targets_are_met():
+    results = scaling_results(90.0, 120.0)
+    results.update(trial_realtime_factor=310.0, participant_cpu_s=6.0, irl_s=1.5)
+    lines = bench.format_table(results).splitlines()
+    verdict = {
+        line[:44].strip(): line.rsplit("  ", 1)[-1]
+        for line in lines
+        if "<=" in line or ">=" in line
+    }
+    assert verdict["assistance step, 3 goal intents (us)"] == "met"
+    assert verdict["15 s CASA trial, simulated s per CPU s"] == "met"
+    assert verdict["one participant's protocol (CPU s)"] == "MISSED"
+    assert verdict["learning one intent (CPU s)"] == "met"
+    # No neural intent measured: its row has no verdict.
+    assert [line for line in lines if "neural" in line][0].endswith("<= 2000")
 
 
 # The command line's arguments: every numeric option is range-checked by argparse.

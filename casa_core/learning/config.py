@@ -18,7 +18,10 @@ class IRLConfig:
     Attributes
     ----------
     hidden : int
-        Units per hidden layer (2 layers; 128 in the original).
+        Units per hidden layer (2 layers; 128 in the original). Fewer units plan
+        faster (the 128 x 128 layer dominates planning's cost), but with 64 units, 50
+        exploring and 20 warm iterations the learned pours assist worse after learning
+        (docs/departures.md, "Learning a new intent"): the default stays 128.
     negative_slope : float
         Slope of the leaky ReLU for negative inputs.
     cost_scale : float
@@ -75,8 +78,11 @@ class IRLConfig:
         mean start); the one whose own optimum ends closest is returned.
     assist_warm_iterations : int
         Warm-started iterations of the learned intent's planner per assistance
-        step (its ``warm_iterations``): one iteration costs about 1 ms with the
-        128-unit network, and an assistance step has about 20 ms.
+        step (its ``warm_iterations``). Default 10: an assistance step has about
+        2 ms, one iteration costs about 0.15 ms with the 128-unit network
+        (:mod:`casa_core.learning.numpy_cost`), and with 10 instead of 15 the trials
+        after learning of simulated participants differ by less than participants do
+        (docs/departures.md, "Learning a new intent").
     planner : PlannerConfig
         The trajectory optimizer used for D^phi and (with
         ``assist_warm_iterations``) by the learned intent.
@@ -94,7 +100,7 @@ class IRLConfig:
     logit_penalty: float = 0.01
     min_iterations: int = 15
     explore_iterations: int = 100
-    assist_warm_iterations: int = 15
+    assist_warm_iterations: int = 10
     verify_candidates: int = 5
     tol_gap: float = 0.005
     tol_end: float = 0.005

@@ -29,6 +29,7 @@ from collections.abc import Mapping
 import numpy as np
 import torch
 
+from casa_core.learning.adam import Adam
 from casa_core.learning.config import IRLConfig
 from casa_core.learning.demonstrations import demo_steps, demo_waypoints
 from casa_core.learning.features import (
@@ -39,6 +40,7 @@ from casa_core.learning.features import (
     object_positions,
 )
 from casa_core.learning.neural_intent import NeuralIntent, calibrate
+from casa_core.learning.numpy_cost import NumpyStateCost
 from casa_core.planning import Plan, optimize
 
 #: Metres of end-position error that one radian of rot error counts as (:func:`end_match`).
@@ -214,10 +216,9 @@ class _Training:
         self.network = network
         self.config = config
         self.n_steps = n_steps
+        self.positions = positions
         self.objects_t = torch.as_tensor(positions, dtype=torch.float64)
-        self.optimizer = torch.optim.Adam(
-            network.parameters(), lr=config.lr, weight_decay=config.weight_decay
-        )
+        self.optimizer = Adam(network.parameters(), lr=config.lr, weight_decay=config.weight_decay)
         self.demo_states = torch.from_numpy(waypoints[:, 1:, :])
         self.demo_ends = waypoints[:, -1, :]
         self.starts = waypoints[:, 0, :]
@@ -257,16 +258,19 @@ class _Training:
 
     def plan_samples(self, samples) -> Plan:
         """D^phi under the current cost: cold at first, then warm or exploring, the cheaper."""
-        for parameter in self.network.parameters():
-            parameter.requires_grad_(False)
+        # The current cost, in numpy for the planner (the same formula as per_state).
+        cost = NumpyStateCost(
+            self.network,
+            objects=self.positions,
+            length_scale=self.config.length_scale,
+            cost_scale=self.config.cost_scale,
+        )
         planner, n_steps = self.config.planner, self.n_steps
         if samples is None:
-            return optimize(self.per_state, self.starts, n_steps, config=planner)
-        warm = optimize(
-            self.per_state, self.starts, n_steps, config=planner, warm_start=samples[:, 1:]
-        )
+            return optimize(cost, self.starts, n_steps, config=planner)
+        warm = optimize(cost, self.starts, n_steps, config=planner, warm_start=samples[:, 1:])
         cold = optimize(
-            self.per_state,
+            cost,
             self.starts,
             n_steps,
             config=planner,
@@ -282,8 +286,6 @@ class _Training:
     def descend(self, plan_states: np.ndarray) -> list[tuple[float, float, float]]:
         """Adam steps on the cost; (loss, demo cost, sample cost) before each step."""
         config = self.config
-        for parameter in self.network.parameters():
-            parameter.requires_grad_(True)
         sample_states = torch.from_numpy(plan_states[:, 1:, :])
         costs = []
         for _ in range(config.steps_per_iteration):

@@ -10,7 +10,8 @@ import torch
 from casa_core._checks import require_positive
 from casa_core.intents import COST_FORMS, GoalIntent
 from casa_core.learning.features import bounded_cost, cost_logits, feature_names, object_positions
-from casa_core.planning import PlannedIntent, PlannerConfig
+from casa_core.learning.numpy_cost import NumpyStateCost
+from casa_core.planning import Plan, PlannedIntent, PlannerConfig
 
 
 class NeuralIntent(PlannedIntent):
@@ -83,6 +84,14 @@ class NeuralIntent(PlannedIntent):
         self._objects_t = torch.as_tensor(self.objects, dtype=torch.float64)
         for parameter in self.network.parameters():
             parameter.requires_grad_(False)
+        # The same cost for the planner, in numpy (the weights as they are now).
+        self._numpy_cost = NumpyStateCost(
+            network,
+            objects=self.objects,
+            length_scale=self.length_scale,
+            cost_scale=self.cost_scale,
+            offset=self.cost_offset,
+        )
 
     def __repr__(self) -> str:
         return f"NeuralIntent({self.name!r}, objects={self.object_names})"
@@ -96,6 +105,11 @@ class NeuralIntent(PlannedIntent):
     def object_map(self) -> dict[str, np.ndarray]:
         """The objects as the mapping name -> position the constructor takes."""
         return dict(zip(self.object_names, self.objects, strict=True))
+
+    @property
+    def planning_cost(self) -> NumpyStateCost:
+        """:meth:`state_cost` in numpy, with its gradient (the network as at construction)."""
+        return self._numpy_cost
 
     def state_cost(self, states: torch.Tensor) -> torch.Tensor:
         logits = cost_logits(
@@ -132,4 +146,6 @@ def calibrate(intent: NeuralIntent, start, *, cost: str) -> tuple[NeuralIntent, 
         guides=intent.guides,
         cost_offset=intent.cost_offset * factor,
     )
+    # The calibrated cost is the learned one times factor > 0: the same optimum.
+    calibrated.seed_plan(start, planner.horizon, Plan(plan.states, plan.costs * factor, 0))
     return calibrated, factor

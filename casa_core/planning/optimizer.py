@@ -156,11 +156,15 @@ def feasible(starts: np.ndarray, targets: np.ndarray, limit: str) -> np.ndarray:
     axis (``limit="axis"``) or its position part scaled to norm <= 1 and its rot
     clipped (``limit="norm"``). States that are already feasible come back unchanged.
     """
-    out = np.empty_like(targets)
+    if limit == "axis" and len(targets) <= _PYTHON_WALK_ROWS:
+        return _walk_axis(np.asarray(starts, dtype=float), targets)
+    # Time first and contiguous: each step's ufuncs then run on one block of memory.
+    by_time = np.ascontiguousarray(np.swapaxes(targets, 0, 1))
+    out = np.empty_like(by_time)
     previous = np.asarray(starts, dtype=float)
     step = np.empty_like(previous)
-    for t in range(targets.shape[1]):
-        np.subtract(targets[:, t, :], previous, out=step)
+    for t in range(by_time.shape[0]):
+        np.subtract(by_time[t], previous, out=step)
         if limit == "axis":
             np.minimum(step, 1.0, out=step)
             np.maximum(step, -1.0, out=step)
@@ -168,8 +172,33 @@ def feasible(starts: np.ndarray, targets: np.ndarray, limit: str) -> np.ndarray:
             norm = np.sqrt((step[:, :3] * step[:, :3]).sum(axis=1, keepdims=True))
             step[:, :3] /= np.maximum(norm, 1.0)
             step[:, 3] = np.minimum(np.maximum(step[:, 3], -1.0), 1.0)
-        np.add(previous, step, out=out[:, t, :])
-        previous = out[:, t, :]
+        previous = np.add(previous, step, out=out[t])
+    return np.ascontiguousarray(np.swapaxes(out, 0, 1))
+
+
+#: Up to this many rows the axis-limited walk runs on Python floats: for a few short
+#: rows, numpy's per-call overhead costs more than the arithmetic (the same result).
+_PYTHON_WALK_ROWS = 3
+
+
+def _walk_axis(starts: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """:func:`feasible` with ``limit="axis"`` on Python floats, row by row (bit for bit)."""
+    out = np.empty_like(targets)
+    for row, (start, target) in enumerate(zip(starts.tolist(), targets.tolist(), strict=True)):
+        x, y, z, r = start
+        walked = []
+        for tx, ty, tz, tr in target:
+            # previous + clip(target - previous, -1, 1), per axis, as the numpy walk.
+            s = tx - x
+            x = x + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            s = ty - y
+            y = y + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            s = tz - z
+            z = z + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            s = tr - r
+            r = r + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
+            walked.append((x, y, z, r))
+        out[row] = walked
     return out
 
 
@@ -206,7 +235,11 @@ def optimize(
     state_cost : callable
         Maps states ``(B, n, 4)`` (float64 tensor, metres and radians) to
         per-state costs ``(B, n)``; must be differentiable in torch. Row b may
-        encode a different cost than row b' (batching across intents).
+        encode a different cost than row b' (batching across intents). A cost with a
+        method ``value_and_grad`` (e.g.
+        :class:`~casa_core.learning.numpy_cost.NumpyStateCost`) is instead called on
+        numpy arrays, and that method gives the per-state costs and the gradient of
+        their sum in the states, without autograd.
     starts : array_like, shape (B, 4) or (4,)
         First state of each trajectory.
     n_steps : int
@@ -266,15 +299,19 @@ def optimize(
     # Best iterate per row: on a non-convex cost Adam can leave a good guess behind.
     best_u = states_u.copy()
     best_cost = np.full(batch, np.inf)
+    value_and_grad = getattr(state_cost, "value_and_grad", None)
     for iterations in range(1, budget + 1):  # noqa: B007 (the count is reported)
-        x = torch.from_numpy(states_u).requires_grad_(True)
-        row_costs = state_cost(x * scale_t).sum(dim=1)
-        (grad,) = torch.autograd.grad(row_costs.sum(), x)
-        row_costs = row_costs.detach().numpy()
+        if value_and_grad is None:
+            x = torch.from_numpy(states_u).requires_grad_(True)
+            row_costs = state_cost(x * scale_t).sum(dim=1)
+            (grad,) = torch.autograd.grad(row_costs.sum(), x)
+            row_costs, grad = row_costs.detach().numpy(), grad.numpy()
+        else:  # a numpy cost with its own gradient (no autograd)
+            per_state, grad = value_and_grad(states_u * scale)
+            row_costs, grad = per_state.sum(axis=1), grad * scale
         improved = row_costs < best_cost
-        best_cost[improved] = row_costs[improved]
-        best_u[improved] = states_u[improved]
-        grad = grad.numpy()
+        np.copyto(best_cost, row_costs, where=improved)
+        np.copyto(best_u, states_u, where=improved[:, None, None])
         squared = grad * grad
         if config.limit == "norm":
             squared[..., :3] = squared[..., :3].mean(axis=-1, keepdims=True)
@@ -289,8 +326,11 @@ def optimize(
         if moved < config.tol:
             break
     states = np.concatenate([starts_np[:, None, :], states_u * scale], axis=1)
-    with torch.no_grad():
-        costs = state_cost(torch.from_numpy(states[:, 1:, :])).sum(dim=1).numpy().copy()
+    if value_and_grad is None:
+        with torch.no_grad():
+            costs = state_cost(torch.from_numpy(states[:, 1:, :])).sum(dim=1).numpy().copy()
+    else:
+        costs = state_cost(states[:, 1:, :]).sum(axis=1)
     keep = best_cost < costs
     if keep.any():
         states[keep, 1:, :] = best_u[keep] * scale

@@ -70,9 +70,21 @@ class PlannedIntent(Intent):
     def state_cost(self, states: torch.Tensor) -> torch.Tensor:
         """Per-state cost ``(B, n)`` of states ``(B, n, 4)`` (float64), differentiable."""
 
+    @property
+    def planning_cost(self):
+        """The per-state cost the planner optimizes: :meth:`state_cost` by default.
+
+        A subclass may return an equal cost that :func:`optimize` evaluates faster (one
+        with ``value_and_grad``, on numpy arrays).
+        """
+        return self.state_cost
+
     def costs_of(self, states) -> np.ndarray:
         """Per-state costs of states ``(n, 4)`` as a numpy array ``(n,)``."""
         states = np.asarray(states, dtype=float).reshape(-1, 4)
+        cost = self.planning_cost
+        if hasattr(cost, "value_and_grad"):
+            return np.asarray(cost(states[None]), dtype=float)[0]
         with torch.no_grad():
             return self.state_cost(torch.from_numpy(states)[None]).numpy()[0].copy()
 
@@ -97,12 +109,14 @@ class PlannedIntent(Intent):
         if self._latest is not None and 0 < n <= self._latest[0]:
             previous_n, previous_states = self._latest
             warm = warm_start_from(previous_states[None], previous_n - n, n)
-            result = optimize(self.state_cost, state[None], n, config=self.planner, warm_start=warm)
+            result = optimize(
+                self.planning_cost, state[None], n, config=self.planner, warm_start=warm
+            )
         elif self.guides and n > 0:
             stay = np.repeat(state[None, None, :], n, axis=1)
             guesses = [warm_start_from(g[None], 0, n) for g in self.guides]
             batch = optimize(
-                self.state_cost,
+                self.planning_cost,
                 np.repeat(state[None], 1 + len(guesses), axis=0),
                 n,
                 config=self.planner,
@@ -113,11 +127,23 @@ class PlannedIntent(Intent):
                 batch.states[best : best + 1], batch.costs[best : best + 1], batch.iterations
             )
         else:
-            result = optimize(self.state_cost, state[None], n, config=self.planner)
+            result = optimize(self.planning_cost, state[None], n, config=self.planner)
         self._remember(key, result)
         if n > 0:
             self._latest = (n, result.states[0])
         return result
+
+    def seed_plan(self, state, time_left: float, plan: Plan) -> None:
+        """Take ``plan`` as the optimal trajectory from ``state`` (as if :meth:`plan` had).
+
+        For a cost known to be a positive multiple of one already planned (a calibrated
+        learned cost): its optimum is the same trajectory, its cost the multiple.
+        """
+        state = np.asarray(state, dtype=float).reshape(4)
+        n = steps_left(time_left, self.dt)
+        self._remember((state.tobytes(), n), plan)
+        if n > 0:
+            self._latest = (n, plan.states[0])
 
     def _remember(self, key: tuple, plan: Plan) -> None:
         self._cache[key] = plan
@@ -142,7 +168,7 @@ class PlannedIntent(Intent):
             previous_n, previous_states = self._latest
             warm = warm_start_from(previous_states[None], previous_n - n, n)
             batch = optimize(
-                self.state_cost,
+                self.planning_cost,
                 np.stack([states[i] for i in missing]),
                 n,
                 config=self.planner,

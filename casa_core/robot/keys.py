@@ -10,6 +10,7 @@ docs/data-contracts.md).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable
 
 import numpy as np
@@ -54,6 +55,13 @@ def keys_to_action(
         Speed of a translation key (m/s) and of a rotate key (rad/s).
     """
     held = check_keys(keys)
+    return _action(held, float(speed), float(rot_speed)).copy()
+
+
+@functools.lru_cache(maxsize=1024)
+def _action(held: frozenset[str], speed: float, rot_speed: float) -> np.ndarray:
+    """:func:`keys_to_action` of checked keys, computed once per key set (a control loop
+    asks for the same few sets every tick); callers get a copy."""
     direction = np.zeros(4)
     for key in held:
         direction += KEY_DIRECTIONS[key]
@@ -62,7 +70,11 @@ def keys_to_action(
 
 def format_keys(keys: Iterable[str]) -> str:
     """Held keys as the log writes them: space-separated, canonical order, '' when none."""
-    held = check_keys(keys)
+    return _formatted(check_keys(keys))
+
+
+@functools.lru_cache(maxsize=1024)
+def _formatted(held: frozenset[str]) -> str:
     return " ".join(key for key in KEYS if key in held)
 
 

@@ -227,6 +227,10 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
     belief = dict.fromkeys(names, 1.0 / len(names))
     alpha = 1.0
     rows = []
+    # Column names made once (the row's columns, in the log's order).
+    q_columns = [f"q{i + 1}" for i in range(len(sim.q))]
+    beta_columns = [(f"beta:{name}", name) for name in names]
+    belief_columns = [(f"belief:{name}", name) for name in names]
     for tick in range(int(round(max_duration / dt)) + 1):
         t = tick * dt
         if tick > 0 and tick % ticks_per_inference == 0:
@@ -236,9 +240,9 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
         row = {"t": round(t, 6), "x": state[0], "y": state[1], "z": state[2], "rot": state[3]}
         row["keys"] = format_keys(held)
         row["alpha"] = alpha
-        row.update({f"q{i + 1}": angle for i, angle in enumerate(sim.q)})
-        row.update({f"beta:{name}": beta[name] for name in names})
-        row.update({f"belief:{name}": belief[name] for name in names})
+        row.update(zip(q_columns, sim.q, strict=True))
+        row.update({column: beta[name] for column, name in beta_columns})
+        row.update({column: belief[name] for column, name in belief_columns})
         rows.append(row)
         if on_tick is not None:
             on_tick(t, state, held, alpha)

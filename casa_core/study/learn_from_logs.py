@@ -6,7 +6,7 @@ import time
 from collections.abc import Mapping
 from pathlib import Path
 
-from casa_core.io import find_files, read_trial
+from casa_core.io import find_files, load_meta, read_trial
 from casa_core.learning.config import IRLConfig
 from casa_core.learning.maxent import MaxEntIRL
 from casa_core.library import intent_path, save_intent
@@ -17,7 +17,8 @@ def read_demonstrations(
 ) -> tuple[list, list[dict]]:
     """The demonstrations in ``folder`` (the casa-trial/1 logs below it, sorted).
 
-    Logs are read with :func:`casa_core.io.read_trial` (which validates them);
+    Logs are read with :func:`casa_core.io.read_trial` (which validates them; a log whose
+    metadata is valid and names another task or phase is skipped without reading its table);
     with ``task``, only that task's trials are kept; with ``phase`` (by default
     ``"demonstration"``), only the trials of that phase, so that a participant's
     folder can be given whole: its assisted trials, where the robot pulled the
@@ -43,6 +44,14 @@ def read_demonstrations(
     stems = [p.with_suffix("") for p in find_files(folder) if p.suffix == ".json"]
     demos, metas, skipped = [], [], set()
     for stem in stems:
+        # A log whose valid metadata names another task or phase is skipped unread (its
+        # table is the costly part); every log that is kept is read and validated whole.
+        known, problems = load_meta(stem.with_suffix(".json"))
+        valid = known is not None and all(p.severity != "error" for p in problems)
+        if valid and not _wanted(known, task, phase):
+            if task is None or known.get("task") == task:
+                skipped.add(known.get("phase"))
+            continue
         meta, frame = read_trial(stem)
         if task is not None and meta["task"] != task:
             continue
@@ -59,6 +68,12 @@ def read_demonstrations(
             f"{folder}: no trial log{which} found (casa-trial/1 .json + .csv pairs){found}"
         )
     return demos, metas
+
+
+def _wanted(meta: dict, task: str | None, phase: str | None) -> bool:
+    return (task is None or meta.get("task") == task) and (
+        phase is None or meta.get("phase") == phase
+    )
 
 
 def learn_to_library(

@@ -1,0 +1,120 @@
+"""``casa bench``: one simulated participant's whole protocol, and its learning, timed.
+
+:func:`participant_benchmark` runs the simulated study's protocol
+(:mod:`casa_core.study.simulate`: the trials before learning and the demonstrations,
+learning each unknown task's intent, the trials after learning) for a few
+participants of the study's config, in a temporary folder, and measures the CPU
+time of this process for each participant's protocol (``participant_cpu_s``) and for
+each learning step in it (``irl_s``: reading the 5 demonstrations, deep max-ent IRL,
+saving the intent and planning its optimum for ``learning.csv``; slightly more than
+the IRL alone). The power analysis runs this protocol once per simulated participant,
+so ``participant_cpu_s`` is its cost per participant on one core.
+
+:data:`TARGETS` holds the targets of every benchmark; :func:`target_met` judges one.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from casa_core.scene import Scene
+
+#: Target of each benchmark key: (comparison, bound). Medians, CPU time of one core.
+TARGETS = {
+    "participant_cpu_s": ("<=", 5.0),
+    "irl_s": ("<=", 2.0),
+    "trial_realtime_factor": (">=", 300.0),
+    "step_us_neural1": ("<=", 2000.0),
+    "step_us_goal3": ("<=", 100.0),
+}
+
+
+def target_met(key: str, value) -> bool | None:
+    """Whether ``value`` meets the target of ``key`` (None without a value or target).
+
+    Examples
+    --------
+    >>> target_met("irl_s", 1.5), target_met("trial_realtime_factor", 250.0)
+    (True, False)
+    >>> target_met("irl_s", None) is None
+    True
+    """
+    if key not in TARGETS or value is None:
+        return None
+    comparison, bound = TARGETS[key]
+    return bool(value <= bound) if comparison == "<=" else bool(value >= bound)
+
+
+def participant_benchmark(scene: Scene, *, config: dict, participants=(0,)) -> dict:
+    """CPU seconds of each participant's protocol and of each learning step in it.
+
+    Parameters
+    ----------
+    scene : Scene
+        The task scene.
+    config : dict
+        A workflow config (:func:`casa_core.config.load_config`): its ``simulation``
+        and ``inference`` blocks, as ``casa simulate`` reads them.
+    participants : sequence of int
+        0-based participant indices to run.
+
+    Returns
+    -------
+    dict
+        ``participant_cpu_s`` and ``irl_s`` (medians), ``participant_cpu_s_all`` and
+        ``irl_s_all`` (every measurement).
+    """
+    from casa_core.study import simulate
+    from casa_core.vocabulary import UNKNOWN_TASKS
+
+    simulation = config["simulation"]
+    inference = simulate.inference_preset(config)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # one core, as in the targets
+    totals, learning = [], []
+    try:
+        for index in participants:
+            with tempfile.TemporaryDirectory() as folder:
+                work = Path(folder)
+                start = time.process_time()
+                simulate.simulate_before_learning(
+                    index,
+                    scene,
+                    simulation=simulation,
+                    out_dir=work / "before",
+                    inference=inference,
+                )
+                for task in UNKNOWN_TASKS:
+                    began = time.process_time()
+                    simulate.learn_from_demonstrations(
+                        work / "before",
+                        task,
+                        scene=scene,
+                        seed=int(simulation["seed"]) + index,
+                        library=work / "library",
+                        pid=simulate.participant_id(index),
+                    )
+                    learning.append(time.process_time() - began)
+                simulate.simulate_after_learning(
+                    index,
+                    scene,
+                    simulation=simulation,
+                    learned=sorted((work / "library").rglob("*.intent.json")),
+                    before_dir=work / "before",
+                    out_dir=work / "after",
+                    inference=inference,
+                )
+                totals.append(time.process_time() - start)
+    finally:
+        torch.set_num_threads(threads)
+    return {
+        "participant_cpu_s": float(np.median(totals)),
+        "irl_s": float(np.median(learning)),
+        "participant_cpu_s_all": totals,
+        "irl_s_all": learning,
+    }

@@ -1,0 +1,120 @@
+"""The fast paths compute what the plain ones compute (speed work must not change results).
+
+Each fast path is checked against the plain computation it replaces: the numpy learned
+cost and its hand-written gradient against torch's autograd on the same network, the
+written-out Adam against ``torch.optim.Adam``, the Python walk against the numpy walk,
+the vector length against ``numpy.linalg.norm``, and plans with the numpy cost against
+plans with the torch cost.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from casa_core.intents import length
+from casa_core.learning import NeuralIntent, cost_network, feature_names
+from casa_core.learning.adam import Adam
+from casa_core.learning.features import bounded_cost, cost_logits
+from casa_core.learning.numpy_cost import NumpyStateCost
+from casa_core.planning import PlannerConfig, optimize
+from casa_core.planning.optimizer import _PYTHON_WALK_ROWS, _walk_axis, feasible
+from casa_core.scene import load_scene
+from casa_core.study.learning_evidence import scene_objects
+
+OBJECTS = scene_objects(load_scene())
+POSITIONS = np.array(list(OBJECTS.values()))
+
+
+def network(hidden=32, seed=3):
+    return cost_network(len(feature_names(OBJECTS)), hidden=hidden, negative_slope=0.01, seed=seed)
+
+
+def random_states(rng, shape=(5, 30)):
+    """States around the workspace with rot over two turns, as planning meets them."""
+    position = rng.uniform([0.2, -0.4, 0.05], [0.7, 0.4, 0.5], size=(*shape, 3))
+    return np.concatenate([position, rng.uniform(-6.0, 6.0, size=(*shape, 1))], axis=-1)
+
+
+def torch_cost_and_grad(net, states, cost_scale, offset):
+    x = torch.from_numpy(states).requires_grad_(True)
+    objects = torch.from_numpy(POSITIONS)
+    values = bounded_cost(cost_logits(net, x, objects=objects, length_scale=0.1), cost_scale)
+    values = values - offset
+    (grad,) = torch.autograd.grad(values.sum(), x)
+    return values.detach().numpy(), grad.numpy()
+
+
+def test_numpy_cost_and_gradient_equal_torch_autograd():
+    # Same float32 network kernels: the values agree to float64 rounding of the sigmoid,
+    # far below the float32 resolution (1e-7 relative) of the network itself.
+    rng = np.random.default_rng(0)
+    for hidden, seed in ((32, 3), (64, 1)):
+        net = network(hidden, seed)
+        states = random_states(rng)
+        fast = NumpyStateCost(
+            net, objects=POSITIONS, length_scale=0.1, cost_scale=56.75, offset=1.5
+        )
+        values, grad = fast.value_and_grad(states)
+        want_values, want_grad = torch_cost_and_grad(net, states, 56.75, 1.5)
+        np.testing.assert_allclose(values, want_values, rtol=0, atol=1e-10)
+        np.testing.assert_allclose(grad, want_grad, rtol=1e-9, atol=1e-9)
+        np.testing.assert_array_equal(fast(states), values)
+
+
+def test_numpy_cost_refuses_another_network():
+    with pytest.raises(ValueError, match="cost_network"):
+        NumpyStateCost(
+            torch.nn.Sequential(torch.nn.Linear(4, 1)),
+            objects=POSITIONS,
+            length_scale=0.1,
+            cost_scale=1.0,
+        )
+
+
+def test_written_out_adam_equals_torch_adam_bit_for_bit():
+    torch.manual_seed(0)
+    inputs = torch.randn(40, len(feature_names(OBJECTS)))
+    nets = [network(16, 2), network(16, 2)]
+    optimizers = [
+        torch.optim.Adam(nets[0].parameters(), lr=3e-3, weight_decay=1e-3),
+        Adam(nets[1].parameters(), lr=3e-3, weight_decay=1e-3),
+    ]
+    for _ in range(60):
+        for net, optimizer in zip(nets, optimizers, strict=True):
+            optimizer.zero_grad()
+            (net(inputs) ** 2).mean().backward()
+            optimizer.step()
+    for theirs, ours in zip(nets[0].parameters(), nets[1].parameters(), strict=True):
+        assert torch.equal(theirs, ours)
+
+
+@pytest.mark.parametrize("rows", range(1, _PYTHON_WALK_ROWS + 1))
+def test_python_walk_equals_the_numpy_walk_bit_for_bit(rows):
+    rng = np.random.default_rng(rows)
+    starts = rng.normal(size=(rows, 4))
+    targets = np.cumsum(1.5 * rng.normal(size=(rows, 30, 4)), axis=1)
+    # More rows than the Python walk takes: the numpy walk, the reference.
+    padded = feasible(np.vstack([starts] * 4), np.vstack([targets] * 4), "axis")[:rows]
+    np.testing.assert_array_equal(_walk_axis(starts, targets), padded)
+
+
+def test_length_is_numpy_norm_bit_for_bit():
+    rng = np.random.default_rng(1)
+    vectors = rng.normal(size=(2000, 3)) * rng.choice([1e-3, 0.1, 1.0, 10.0], size=(2000, 1))
+    assert all(length(v) == float(np.linalg.norm(v)) for v in vectors)
+
+
+def test_plans_with_the_numpy_cost_match_plans_with_the_torch_cost():
+    # The optimizer runs the same iterations on costs equal to 1e-14: the plans agree to
+    # far below a millimetre (the tolerance allows for a rare tie broken the other way).
+    net = network(64, 0)
+    intent = NeuralIntent("n", net, objects=OBJECTS, cost_scale=56.75, length_scale=0.1)
+    config = PlannerConfig(iterations=60)
+    starts = np.array([[0.45, -0.22, 0.38, 0.0], [0.4, 0.0, 0.3, 0.5]])
+    fast = optimize(intent.planning_cost, starts, 30, config=config)
+    plain = optimize(intent.state_cost, starts, 30, config=config)
+    assert fast.iterations == plain.iterations
+    np.testing.assert_allclose(fast.states, plain.states, atol=1e-9)
+    np.testing.assert_allclose(fast.costs, plain.costs, rtol=1e-9)
