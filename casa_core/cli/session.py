@@ -49,6 +49,9 @@ def _session(args) -> int:
     from casa_core.study.session import SessionSettings
     from casa_core.study.session_run import COMPLETE, run_session
 
+    import torch
+
+    torch.set_num_threads(1)  # the window's renderer keeps a core; learning is single-threaded
     # Paths given are the user's, from the working directory; the defaults are the
     # package's own files, so the command works from any folder.
     config = load_config(*(args.config or [DEFAULT_CONFIG]))

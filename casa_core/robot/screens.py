@@ -36,6 +36,9 @@ MARGIN, CHAR_WIDTH, LINE_HEIGHT = 24, 7.6, 17.0
 INK, WARN, GO = (0.05, 0.05, 0.1), (0.75, 0.05, 0.05), (0.05, 0.5, 0.1)
 HALO_RGBA = (1.0, 0.8, 0.0, 0.45)
 PATH_RGB = (1.0, 0.45, 0.0)
+#: The window: 1024 x 768 pixels, at most 50 frames a second (pybullet's own limit, in
+#: microseconds between frames, is 250: a software renderer would take a whole core).
+GUI_OPTIONS = "--width=1024 --height=768 --minGraphicsUpdateTimeMs=20000"
 #: A loop slower than this fraction of real time is warned about.
 SLOW = 0.95
 SCALE = "1 = strongly disagree     4 = neither agree nor disagree     7 = strongly agree"
@@ -69,6 +72,7 @@ class SessionWindow:
     notify : callable, optional
         ``notify(kind)`` each time a screen is shown (``instructions``, ``preview``,
         ``countdown``, ``trial``, ``end-of-trial``, ``likert``, ``learning``, ``pause``,
+        ``getting-ready``,
         ``confirm-abort``, ``end``): the session log, or a test driving the window.
     """
 
@@ -81,7 +85,7 @@ class SessionWindow:
 
     # -- the window --------------------------------------------------------------------
     def _open(self) -> None:
-        self.sim = ArmSimulation(self.scene, gui=True)
+        self.sim = ArmSimulation(self.scene, gui=True, gui_options=GUI_OPTIONS)
         Window(self.sim, realtime=True)  # the camera behind the robot, no pybullet panels
         self.client = self.sim.client
         self.latch = KeyLatch()
@@ -102,8 +106,9 @@ class SessionWindow:
             :4
         ]
         self.width, self.height = width, height
-        to_clip = np.asarray(projection).reshape(4, 4).T @ np.asarray(view).reshape(4, 4).T
-        self._unproject = np.linalg.inv(to_clip)
+        self._to_clip = np.asarray(projection).reshape(4, 4).T @ np.asarray(view).reshape(4, 4).T
+        self._unproject = np.linalg.inv(self._to_clip)
+        self._resting = None
 
     def reopen(self) -> None:
         """A new window after the old one was closed."""
@@ -123,6 +128,12 @@ class SessionWindow:
                 raise WindowClosed from None
             raise
 
+    def pixel(self, point) -> tuple[float, float]:
+        """Where the world ``point`` is drawn, in pixels from the top left."""
+        clip = self._to_clip @ np.r_[np.asarray(point, dtype=float), 1.0]
+        x, y = clip[:2] / clip[3]
+        return (x + 1) / 2 * self.width, (1 - y) / 2 * self.height
+
     def at(self, u: float, v: float) -> list[float]:
         """The world point drawn at pixel ``(u, v)`` (from the top left), near the camera."""
         point = self._unproject @ np.array([2 * u / self.width - 1, 1 - 2 * v / self.height, 0, 1])
@@ -132,6 +143,7 @@ class SessionWindow:
     def clear(self) -> None:
         """Remove every text and line; hide the highlight and the preview marker."""
         self._call(p.removeAllUserDebugItems)
+        self._resting = None
         for body in (self._halo, self._ghost):
             self._call(p.resetBasePositionAndOrientation, body, [0, 0, -1], [0, 0, 0, 1])
 
@@ -165,23 +177,11 @@ class SessionWindow:
         """A halo and a label on the task's target, in the scene."""
         target = task_waypoints(task, self.scene)[-1, :3]
         self._call(p.resetBasePositionAndOrientation, self._halo, list(target), [0, 0, 0, 1])
-        above = target + [0.0, 0.0, 0.12]
-        self._call(p.addUserDebugLine, list(above), list(target), [0.9, 0.6, 0], lineWidth=3)
-        self._call(
-            p.addUserDebugText,
-            "TARGET",
-            list(above + [0, 0, 0.01]),
-            textColorRGB=[0.7, 0.3, 0],
-            textSize=1.6,
-        )
-
-    def bar(self, fraction: float, top: float) -> None:
-        """A progress bar across the window at pixel row ``top``."""
-        left, right = MARGIN, self.width - MARGIN
-        filled = left + (right - left) * float(np.clip(fraction, 0, 1))
-        self._call(p.addUserDebugLine, self.at(left, top), self.at(right, top), [0.75] * 3, 14)
-        if filled > left:
-            self._call(p.addUserDebugLine, self.at(left, top), self.at(filled, top), GO, 14)
+        u, v = self.pixel(target)
+        # Drawn near the camera, so that the arm never hides the label.
+        label = self.at(u - 30, v - 48)
+        self._call(p.addUserDebugText, "TARGET", label, textColorRGB=[0.7, 0.3, 0], textSize=1.6)
+        self._call(p.addUserDebugLine, self.at(u, v - 42), self.at(u, v - 14), [0.9, 0.6, 0], 3)
 
     # -- the keyboard ------------------------------------------------------------------
     def poll(self) -> frozenset[int]:
@@ -218,16 +218,22 @@ class SessionWindow:
         self.notify("instructions")
         return "start" if self.wait_key({ENTER, PAUSE}) == ENTER else "pause"
 
-    def preview(self, reference: np.ndarray, seconds: float) -> None:
-        """The reference path as a line, a marker travelling along it in ``seconds``."""
+    def preview(self, task: str, reference: np.ndarray, seconds: float) -> None:
+        """The task's reference path as a line, a marker travelling along it in ``seconds``.
+
+        ``reference`` is :func:`casa_core.tasks.intended_trajectory`'s ``[t, x, y, z, rot]``.
+        """
         if seconds <= 0:
             return
+        self._call(p.removeAllUserDebugItems)
+        self.highlight(task)
         self.write("Watch the orange marker: one way to do this task.", 0, size=1.6)
+        # The reference is straight between the task's waypoints: one line each.
+        corners = task_waypoints(task, self.scene)[:, :3]
+        for a, b in zip(corners[:-1], corners[1:], strict=True):
+            if np.linalg.norm(b - a) > 1e-6:
+                self._call(p.addUserDebugLine, list(a), list(b), PATH_RGB, lineWidth=4)
         positions = reference[:, 1:4]
-        step = max(1, len(positions) // 60)
-        for a, b in zip(positions[:-step:step], positions[step::step], strict=False):
-            self._call(p.addUserDebugLine, list(a), list(b), PATH_RGB, lineWidth=4)
-        self._call(p.addUserDebugLine, list(positions[-step]), list(positions[-1]), PATH_RGB, 4)
         self.notify("preview")
         tilting = False
         began = time.perf_counter()
@@ -276,12 +282,12 @@ class SessionWindow:
             recent_rate = (len(recent) - 1) * dt / max(recent[-1] - recent[0], 1e-9)
             if len(recent) == 40 and recent_rate < SLOW:
                 self.slow_ticks += 1
+        # Few drawing calls: each waits for a frame of the window.
         tick = int(round(t / dt))
         if tick == 20:
             self._call(p.removeUserDebugItem, self._go)
-        if tick % 5 == 0:
-            held = " ".join(sorted(keys)) or "-"
-            banner = f"time {t:4.1f} s     keys {held}     Enter: finished     P: pause"
+        if tick % 20 == 0:
+            banner = f"time {t:3.0f} s          Enter: finished          P: pause"
             self._banner = self._replace(self._banner, banner, 30, INK)
             if len(self._walls) >= 40 and recent_rate < SLOW:
                 warning = f"This computer runs slower than real time ({100 * recent_rate:.0f}%)."
@@ -332,13 +338,30 @@ class SessionWindow:
                 shown = self._replace(shown, text, self.height - 120, GO)
 
     def resting(self, message: str, fraction: float) -> None:
-        """The rest screen while the robot learns: ``message`` and a progress bar."""
-        self._call(p.removeAllUserDebugItems)
-        top = self.write("Please rest for a moment.", 0, size=2.0)
-        top = self.write(message, top)
-        self.bar(fraction, top + 30)
-        self.write(f"{100 * fraction:3.0f}%", top + 50, size=1.4)
+        """The rest screen while the robot learns: ``message`` and a progress bar.
+
+        Drawn whole when ``message`` changes; else only the bar and its percentage move.
+        """
+        if self._resting != message:
+            self.clear()
+            top = self.write("Please rest for a moment.", 0, size=2.0)
+            self._bar_top = self.write(message, top) + 30
+            self._resting, self._bar = message, [None, None, None]
+            self._bar[0] = self._line(None, MARGIN, self.width - MARGIN, (0.75,) * 3)
+        right = MARGIN + (self.width - 2 * MARGIN) * float(np.clip(fraction, 0.005, 1))
+        self._bar[1] = self._line(self._bar[1], MARGIN, right, GO)
+        self._bar[2] = self._replace(
+            self._bar[2], f"{100 * fraction:3.0f}%", self._bar_top + 24, INK
+        )
         self.poll()
+
+    def _line(self, item: int | None, left: float, right: float, color) -> int:
+        """A thick line at the progress bar's row, in place of ``item``."""
+        options = {} if item is None else {"replaceItemUniqueId": item}
+        top = self._bar_top
+        return self._call(
+            p.addUserDebugLine, self.at(left, top), self.at(right, top), color, 14, **options
+        )
 
     def pause(self) -> str:
         """The pause screen: ``"continue"`` (C) or, confirmed, ``"abort"`` (Q then Y)."""

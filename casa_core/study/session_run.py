@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pybullet as p
 
+from casa_core.defaults import HORIZON
 from casa_core.io import SCHEMA, check_meta
 from casa_core.io.atomic import atomic_write_text
 from casa_core.io.folders import SCENE_NAME
@@ -144,6 +145,7 @@ class _Runner:
     def __init__(self, record: SessionRecord, scene: Scene, log: SessionLog, window_factory):
         self.record, self.scene, self.log = record, scene, log
         self.settings = record.settings
+        self._after = None  # the intents after learning, once loaded
         self.window = window_factory(scene, notify=lambda kind: print(f"screen {kind}", flush=True))
 
     def run(self) -> str:
@@ -189,18 +191,34 @@ class _Runner:
             return self._questions(step.spec)
         return self._learning()
 
+    def _learned_intents(self) -> list:
+        """What the robot knows after learning, planned from the start once, before GO.
+
+        The assistant plans every intent from the start state when a trial begins; for
+        a learned intent that takes seconds, so it is done here, on a waiting screen, and
+        the intents (their plans cached) serve every trial after learning.
+        """
+        if self._after is None:
+            self.window.message(*texts.GETTING_READY, "getting-ready", 0.0)
+            learned = self.record.learned_files()
+            intents = trial_intents(self.scene, learned, inference=self.settings.inference)
+            start = self.window.sim.reset(self.scene.start_state)
+            for intent in intents:
+                intent.cost_to_go(start, HORIZON)  # the assistant's default
+            self._after = intents
+        return self._after
+
     def _trial(self, spec) -> str | None:
         window, settings = self.window, self.settings
         label = label_of(spec, self.record.index)
+        if spec.phase == "after_learning":
+            self._learned_intents()
         title, body = texts.instructions(spec, label, demonstrations=settings.demonstrations)
         if window.instructions(title, body, spec.task) == "pause":
             return "pause"
-        window.preview(intended_trajectory(spec.task, self.scene), settings.preview)
+        window.preview(spec.task, intended_trajectory(spec.task, self.scene), settings.preview)
         window.countdown(settings.countdown)
-        intents = None
-        if spec.phase == "after_learning":
-            learned = self.record.learned_files()
-            intents = trial_intents(self.scene, learned, inference=settings.inference)
+        intents = self._learned_intents() if spec.phase == "after_learning" else None
         source = window.keyboard()
         window.start_trial(spec.task)
         started = datetime.now(UTC).isoformat(timespec="seconds")

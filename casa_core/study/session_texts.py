@@ -104,4 +104,5 @@ WELCOME = (
     "Press Enter to begin.",
 )
 GOODBYE = ("Thank you!", "The session is complete. You may call the experimenter.")
+GETTING_READY = ("One moment", "The robot is getting ready for the next task.")
 STOPPED = ("Stopped", "The session is stopped. Everything recorded so far is kept.")
