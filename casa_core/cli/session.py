@@ -43,13 +43,13 @@ def register(commands) -> None:
 def _session(args) -> int:
     from pathlib import Path
 
+    import torch
+
     from casa_core.config import DEFAULT_CONFIG, load_config
     from casa_core.io import LogError
     from casa_core.scene import DEFAULT_SCENE, load_scene
     from casa_core.study.session import SessionSettings
     from casa_core.study.session_run import COMPLETE, run_session
-
-    import torch
 
     torch.set_num_threads(1)  # the window's renderer keeps a core; learning is single-threaded
     # Paths given are the user's, from the working directory; the defaults are the
