@@ -250,12 +250,12 @@ class SessionWindow:
 
     def countdown(self, seconds: int) -> None:
         """3, 2, 1 in the middle of the window, one second each."""
-        self._call(p.removeAllUserDebugItems)
-        self.notify("countdown")
         for remaining in range(seconds, 0, -1):
             self._call(p.removeAllUserDebugItems)
             self.write("Get ready: the trial starts after the countdown.", 0, size=1.6)
             self.big(str(remaining))
+            if remaining == seconds:
+                self.notify("countdown")
             time.sleep(1.0)
         self._call(p.removeAllUserDebugItems)
 
@@ -321,7 +321,8 @@ class SessionWindow:
         self.clear()
         top = self.write(f"Question {number} of {total}", 0, size=1.6)
         top = self.write(statement, top, size=2.0)
-        top = self.write("How much do you agree?  " + SCALE, top, size=1.3)
+        top = self.write("How much do you agree?", top, size=1.4)
+        top = self.write(SCALE, top, size=1.2)
         self.write("Press a number from 1 to 7, then Enter.   P: pause", top, color=GO)
         self.poll()
         self.notify("likert")
@@ -342,18 +343,21 @@ class SessionWindow:
 
         Drawn whole when ``message`` changes; else only the bar and its percentage move.
         """
-        if self._resting != message:
+        fresh = self._resting != message
+        if fresh:
             self.clear()
             top = self.write("Please rest for a moment.", 0, size=2.0)
             self._bar_top = self.write(message, top) + 30
             self._resting, self._bar = message, [None, None, None]
-            self._bar[0] = self._line(None, MARGIN, self.width - MARGIN, (0.75,) * 3)
+            self._bar[0] = self._line(None, MARGIN, self.width - MARGIN, (1.0, 1.0, 1.0))
         right = MARGIN + (self.width - 2 * MARGIN) * float(np.clip(fraction, 0.005, 1))
         self._bar[1] = self._line(self._bar[1], MARGIN, right, GO)
         self._bar[2] = self._replace(
             self._bar[2], f"{100 * fraction:3.0f}%", self._bar_top + 24, INK
         )
         self.poll()
+        if fresh:
+            self.notify("learning")
 
     def _line(self, item: int | None, left: float, right: float, color) -> int:
         """A thick line at the progress bar's row, in place of ``item``."""

@@ -292,7 +292,6 @@ class _Runner:
             worker = threading.Thread(target=learn, daemon=True)
             worker.start()
             message = texts.learning_message(number, len(tasks), task)
-            self.window.notify("learning")
             while worker.is_alive():
                 fraction = (number - 1 + 0.95 * state["done"]) / len(tasks)
                 try:
