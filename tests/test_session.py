@@ -227,7 +227,10 @@ class Operator:
         self.shots = shots
         self.seen: set[str] = set()
         self.score = 0
-        self.paused_once = False
+        # At the first instructions of each run: P (first run), Escape (second run).
+        self.interrupt: list[str] = ["p", "Escape"]
+        self.first_instructions = True
+        self.pauses = 0
 
     def xdotool(self, *args: str) -> str:
         run = subprocess.run(
@@ -255,11 +258,11 @@ class Operator:
             if kind == "welcome":
                 self.key("Return")
         elif kind == "instructions":
-            if not self.paused_once:
-                self.paused_once = True
-                self.key("p")
+            if self.first_instructions and self.interrupt:
+                self.key(self.interrupt.pop(0))
             else:
                 self.key("Return")
+            self.first_instructions = False
         elif kind == "trial":
             self.xdotool("mousemove", "500", "380")
             self.xdotool("keydown", "Up")
@@ -272,7 +275,11 @@ class Operator:
             time.sleep(0.1)
             self.key("Return")
         elif kind == "pause":
-            self.key("c")
+            self.pauses += 1
+            # The second pause asks to stop, then takes it back (N).
+            self.key("q" if self.pauses == 2 else "c")
+        elif kind == "confirm-abort":
+            self.key("n")
 
 
 def session_command(out: Path, config: Path) -> list[str]:
@@ -341,6 +348,7 @@ def test_a_whole_session_in_a_real_window_resumes_after_a_kill_and_validates(tmp
         folder = out / "P03"
         on_disk = sorted(p.stem for p in folder.glob("*.json"))
         assert len(on_disk) == 5, on_disk
+        operator.first_instructions = True
         code, second = drive(command, elsewhere, operator)
         assert code == 0, "\n".join(second[-40:])
     finally:
@@ -359,6 +367,10 @@ def test_a_whole_session_in_a_real_window_resumes_after_a_kill_and_validates(tmp
     # Counterbalancing printed in the log (participant 3: order 2 of the simulated study's).
     assert "order 2 mod 6 = 2" in log and ", ".join(protocol.method_order(2)) in log
     assert "loop rate" in log
+    # P paused the first run; Escape closed the window in the second: reopened, paused.
+    assert "paused before finishing: trial familiarization" in "\n".join(first)
+    assert "the window was closed (Escape or its close button): reopened, paused" in log
+    assert operator.pauses == 3  # the first run's, Escape's, and the one taken back
     result = subprocess.run(
         [sys.executable, "-m", "casa_core.cli", "validate", str(out)],
         capture_output=True,
@@ -369,4 +381,4 @@ def test_a_whole_session_in_a_real_window_resumes_after_a_kill_and_validates(tmp
     assert (out / "scene.yaml").is_file() and (folder / SESSION_FOLDER / "session.log").is_file()
     assert load_scene(out / "scene.yaml") == load_scene()
     missing_shots = set(SHOTS) - {p.stem.split("-", 1)[1] for p in shots.glob("*.png")}
-    assert not missing_shots - {"confirm-abort"}, missing_shots
+    assert not missing_shots, missing_shots
