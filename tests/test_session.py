@@ -170,6 +170,102 @@ def test_no_text_of_any_step_names_a_method():
             assert not METHOD_WORDS.search(text), text
 
 
+class FakeWindow:
+    """The session window's interface over a headless arm, answering from a script."""
+
+    def __init__(self, scene, *, notify=None, script=()):
+        from casa_core.robot.sim import ArmSimulation
+
+        self.sim = ArmSimulation(scene)
+        self.client = self.sim.client
+        self.script = list(script)  # answers of instructions/pause, in order
+        self.rate, self.slow_ticks = 1.0, 0
+        self.shown: list[str] = []
+
+    def _next(self, default):
+        return self.script.pop(0) if self.script else default
+
+    def message(self, title, body, kind, seconds=2.0):
+        self.shown += [title, body]
+
+    def instructions(self, title, body, task):
+        self.shown += [title, body]
+        return self._next("start")
+
+    def preview(self, task, reference, seconds):
+        pass
+
+    def countdown(self, seconds):
+        pass
+
+    def keyboard(self):
+        from casa_core.study.key_sources import ScriptedKeys
+
+        keys = ScriptedKeys([(0.5, ["x+"])])
+        keys.paused = False
+        return keys
+
+    def start_trial(self, task):
+        pass
+
+    def on_tick(self, t, state, keys, alpha):
+        pass
+
+    def end_trial(self, message):
+        pass
+
+    def likert(self, statement, number, total):
+        self.shown.append(statement)
+        return 5
+
+    def pause(self):
+        return self._next("continue")
+
+    def close(self):
+        self.sim.close()
+
+
+def test_stopping_from_the_pause_screen_keeps_what_was_recorded_and_resumes_there(tmp_path):
+    from casa_core.scene import DEFAULT_SCENE
+    from casa_core.study.session_run import STOPPED, run_session
+
+    scene = load_scene()
+    windows = []
+
+    def factory(script):
+        def make(scene, *, notify=None):
+            windows.append(FakeWindow(scene, script=script))
+            return windows[-1]
+
+        return make
+
+    options = {"settings": settings(), "scene_source": DEFAULT_SCENE}
+    # Practice recorded, then P at the next instructions and a confirmed stop.
+    outcome = run_session(
+        scene, "P05", tmp_path, window_factory=factory(["start", "pause", "abort"]), **options
+    )
+    assert outcome == STOPPED
+    folder = tmp_path / "P05"
+    assert [p.name for p in folder.glob("*.json")] == ["familiarization_familiarization_NA.json"]
+    log = (folder / SESSION_FOLDER / "session.log").read_text()
+    assert "stopped by the participant; everything recorded is kept" in log
+    record = SessionRecord(folder, "P05", settings())
+    first_assisted = protocol.before_learning(participant_index("P05"))[1]
+    assert record.next_step() == Step("trial", first_assisted)
+    # The window showed no method's name, in the instructions or the questions.
+    assert not [text for text in windows[0].shown if METHOD_WORDS.search(text)]
+    # The same command again resumes at the first assisted trial.
+    assert "next step: trial" in log
+    run_session(
+        scene, "P05", tmp_path, window_factory=factory(["start", "pause", "abort"]), **options
+    )
+    assert len(list(folder.glob("*.json"))) == 2
+    assert (
+        f"next step: trial {first_assisted.stem}"
+        in (folder / SESSION_FOLDER / "session.log").read_text()
+    )
+
+
 def test_a_participant_id_without_a_number_is_refused_naming_the_rule(tmp_path, capsys):
     from casa_core.cli import main
 
@@ -378,6 +474,16 @@ def test_a_whole_session_in_a_real_window_resumes_after_a_kill_and_validates(tmp
         timeout=120,
     )
     assert result.returncode == 0, result.stdout + result.stderr
+    # The workflow's `process` rule on it: the tables, the answers as the participant's.
+    processed = tmp_path / "processed"
+    process = [sys.executable, "-m", "casa_core.cli", "process", str(out), "--out", str(processed)]
+    process += ["--scene", str(out / "scene.yaml"), "--dataset", "mylab"]
+    result = subprocess.run(process, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    likert = pd.read_csv(processed / "likert.csv", keep_default_na=False)
+    assert len(likert) == 3 * 11 and (likert["answered_by"] == "participant").all()
+    trials = pd.read_csv(processed / "trials.csv", keep_default_na=False)
+    assert set(trials["method"]) == set(METHODS)
     assert (out / "scene.yaml").is_file() and (folder / SESSION_FOLDER / "session.log").is_file()
     assert load_scene(out / "scene.yaml") == load_scene()
     missing_shots = set(SHOTS) - {p.stem.split("-", 1)[1] for p in shots.glob("*.png")}
