@@ -35,7 +35,7 @@ from casa_core.scene import Scene
 from casa_core.study import protocol
 from casa_core.study.closed_loop import TrialResult
 from casa_core.study.protocol import TrialSpec
-from casa_core.vocabulary import LEARNED_NAMES, QUESTIONS, UNKNOWN_TASKS
+from casa_core.vocabulary import LEARNED_NAMES, QUESTIONS, UNANALYSED_PHASES, UNKNOWN_TASKS
 
 #: The hidden folder of a participant's session state (skipped by validation).
 SESSION_FOLDER = ".session"
@@ -99,7 +99,7 @@ def label_of(spec: TrialSpec, index: int) -> str | None:
     >>> label_of(TrialSpec("familiarization", "NA", "familiarization"), 0) is None
     True
     """
-    if spec.phase in ("familiarization", "demonstration"):
+    if spec.phase in UNANALYSED_PHASES:
         return None
     if spec.phase == "after_learning":
         return AFTER_LEARNING_LABEL
