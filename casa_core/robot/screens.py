@@ -53,8 +53,10 @@ def wrap(text: str, size: float, width: int) -> list[str]:
 
     Examples
     --------
-    >>> wrap("one two three four", 1.0, int(2 * MARGIN + 9 * CHAR_WIDTH))
-    ['one two', 'three', 'four']
+    >>> wrap("one two three four five", 1.0, 140)  # 12 characters a line
+    ['one two', 'three four', 'five']
+    >>> wrap("first\\n\\nsecond", 1.0, 140)
+    ['first', '', 'second']
     """
     chars = max(10, int((width - 2 * MARGIN) / (CHAR_WIDTH * size)))
     lines = []
