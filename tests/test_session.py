@@ -266,6 +266,19 @@ def test_stopping_from_the_pause_screen_keeps_what_was_recorded_and_resumes_ther
     )
 
 
+def test_a_dataset_of_another_layout_is_refused_before_a_window_opens(tmp_path, capsys):
+    from casa_core.cli import main
+    from casa_core.scene import DEFAULT_SCENE
+
+    moved = DEFAULT_SCENE.read_text().replace("red: [0.40, 0.22, 0.12]", "red: [0.40, 0.25, 0.12]")
+    assert moved != DEFAULT_SCENE.read_text()
+    (tmp_path / "scene.yaml").write_text(moved, encoding="utf-8")
+    assert main(["session", "--participant", "P01", "--out", str(tmp_path)]) == 2
+    error = capsys.readouterr().err
+    assert "the dataset's scene is not the layout of" in error and "Traceback" not in error
+    assert not (tmp_path / "P01").exists()
+
+
 def test_a_participant_id_without_a_number_is_refused_naming_the_rule(tmp_path, capsys):
     from casa_core.cli import main
 

@@ -65,7 +65,7 @@ def check_dataset_scene(out: Path, scene: Scene, source: Path) -> None:
     elif load_scene(own) != scene:
         raise ValueError(
             f"{own}: the dataset's scene is not the layout of {source}; every participant of "
-            "a dataset must see the same scene (give --scene {own}, or another --out)"
+            f"a dataset must see the same scene (give --scene {own}, or another --out)"
         )
 
 
