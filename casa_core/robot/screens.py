@@ -1,17 +1,14 @@
 """The window of ``casa session``: one pybullet window, its screens and its keyboard.
 
-One window stays open for a participant's whole session
-(:mod:`casa_core.study.session_run` runs the steps). Its screens: the instructions of
-the next trial (what to do and where, in words, with the target highlighted in the
-scene), a preview of the reference path (a marker travels along it), a countdown, the
-trial itself (time and held keys; a warning when the loop runs slower than real time),
-its end, the Likert questions, the rest while the robot learns (a progress bar) and the
-pause. Text is placed at fixed pixels of the window and wrapped to its width. No text
-names an assistance method: the robots are "robot A", "robot B"... Every key is read
-through :class:`~casa_core.robot.teleop.KeyLatch`, so a one-frame tap counts.
-
-pybullet closes its window on Escape whatever the settings: the session then reopens
-the window at the pause screen (:class:`WindowClosed`).
+One window stays open for a participant's whole session (the steps:
+:mod:`casa_core.study.session_run`). Its screens: the next trial's instructions (what to
+do and where, the target highlighted), a preview of the reference path, a countdown,
+the trial (its time; a warning when the loop runs slower than real time), its end, the
+Likert questions, the rest while the robot learns (a progress bar) and the pause. Text
+sits at fixed pixels of the window, wrapped to its width; keys are read through
+:class:`~casa_core.robot.teleop.KeyLatch`, so a one-frame tap counts. pybullet closes
+its window on Escape whatever its settings: :class:`WindowClosed` lets the session
+reopen it, paused.
 """
 
 from __future__ import annotations
@@ -36,8 +33,8 @@ MARGIN, CHAR_WIDTH, LINE_HEIGHT = 24, 7.6, 17.0
 INK, WARN, GO = (0.05, 0.05, 0.1), (0.75, 0.05, 0.05), (0.05, 0.5, 0.1)
 HALO_RGBA = (1.0, 0.8, 0.0, 0.45)
 PATH_RGB = (1.0, 0.45, 0.0)
-#: The window: 1024 x 768 pixels, at most 50 frames a second (pybullet's own limit, in
-#: microseconds between frames, is 250: a software renderer would take a whole core).
+#: 1024 x 768 pixels, at least 20 ms between frames (pybullet's default, 4 ms, lets a
+#: software renderer take whole cores from the loop and the learning).
 GUI_OPTIONS = "--width=1024 --height=768 --minGraphicsUpdateTimeMs=20000"
 #: A loop slower than this fraction of real time is warned about.
 SLOW = 0.95
