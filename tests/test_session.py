@@ -179,7 +179,7 @@ class FakeWindow:
         self.sim = ArmSimulation(scene)
         self.client = self.sim.client
         self.script = list(script)  # answers of instructions/pause, in order
-        self.rate, self.slow_ticks = 1.0, 0
+        self.rate = self.slowest = 1.0
         self.shown: list[str] = []
 
     def _next(self, default):

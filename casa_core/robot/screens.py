@@ -78,8 +78,7 @@ class SessionWindow:
     def __init__(self, scene: Scene, *, notify: Callable[[str], None] | None = None):
         self.scene = scene
         self.notify = notify or (lambda kind: None)
-        self.rate = 1.0
-        self.slow_ticks = 0
+        self.rate = self.slowest = 1.0
         self._open()
 
     # -- the window --------------------------------------------------------------------
@@ -138,7 +137,6 @@ class SessionWindow:
         point = self._unproject @ np.array([2 * u / self.width - 1, 1 - 2 * v / self.height, 0, 1])
         return list(point[:3] / point[3])
 
-    # -- drawing -----------------------------------------------------------------------
     def clear(self) -> None:
         """Remove every text and line; hide the highlight and the preview marker."""
         self._call(p.removeAllUserDebugItems)
@@ -182,7 +180,6 @@ class SessionWindow:
         self._call(p.addUserDebugText, "TARGET", label, textColorRGB=[0.7, 0.3, 0], textSize=1.6)
         self._call(p.addUserDebugLine, self.at(u, v - 42), self.at(u, v - 14), [0.9, 0.6, 0], 3)
 
-    # -- the keyboard ------------------------------------------------------------------
     def poll(self) -> frozenset[int]:
         """The keys pressed since the last poll."""
         _, pressed = self.latch.update(self._call(p.getKeyboardEvents))
@@ -267,20 +264,23 @@ class SessionWindow:
         self._banner = self._warning = None
         self._clock = time.perf_counter()
         self._walls: list[float] = []
-        self.rate, self.slow_ticks = 1.0, 0
+        self.rate = self.slowest = 1.0
         self.notify("trial")
 
     def on_tick(self, t: float, state, keys: frozenset, alpha: float) -> None:
-        """Time and held keys; keeps real time and measures the loop's rate (``rate``)."""
+        """The trial's time; keeps real time and measures it.
+
+        ``rate``: simulated over wall time since GO (late ticks are caught up, never run
+        ahead); ``slowest``: the slowest 2 s (40 ticks), warned about below :data:`SLOW`.
+        """
         dt = self.sim.settings.dt
         now = time.perf_counter()
         self._walls.append(now)
-        if len(self._walls) > 1:
-            self.rate = (len(self._walls) - 1) * dt / (now - self._walls[0])
-            recent = self._walls[-40:]
-            recent_rate = (len(recent) - 1) * dt / max(recent[-1] - recent[0], 1e-9)
-            if len(recent) == 40 and recent_rate < SLOW:
-                self.slow_ticks += 1
+        recent = self._walls[-40:]
+        recent_rate = (len(recent) - 1) * dt / max(recent[-1] - recent[0], 1e-9)
+        if len(recent) == 40:
+            self.slowest = min(self.slowest, recent_rate)
+        slow = len(recent) == 40 and recent_rate < SLOW
         # Few drawing calls: each waits for a frame of the window.
         tick = int(round(t / dt))
         if tick == 20:
@@ -288,12 +288,13 @@ class SessionWindow:
         if tick % 20 == 0:
             banner = f"time {t:3.0f} s          Enter: finished          P: pause"
             self._banner = self._replace(self._banner, banner, 30, INK)
-            if len(self._walls) >= 40 and recent_rate < SLOW:
+            if slow:
                 warning = f"This computer runs slower than real time ({100 * recent_rate:.0f}%)."
                 self._warning = self._replace(self._warning, warning, 56, WARN)
         delay = self._clock + t + dt - time.perf_counter()
         if delay > 0:
             time.sleep(delay)
+        self.rate = (t + dt) / (time.perf_counter() - self._clock)
 
     def _replace(self, item: int | None, text: str, top: float, color) -> int:
         """One line at pixel row ``top`` in place of ``item``; the new item's id."""

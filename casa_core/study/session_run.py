@@ -239,21 +239,25 @@ class _Runner:
         if source.paused:
             self.log(f"trial {spec.stem} interrupted by a pause: not recorded, it runs again")
             return "pause"
-        rate = window.rate
+        rate, slowest = window.rate, window.slowest
         result.meta["started_at"] = started
         shown = f"shown as {label}" if label else "no robot help"
-        result.meta["notes"] = f"{shown}; loop rate {rate:.3f} of real time"
+        result.meta["notes"] = (
+            f"{shown}; loop rate {rate:.3f} of real time, slowest 2 s {slowest:.3f}"
+        )
         stem = self.record.write_trial(spec, result)
         seconds = float(result.frame["t"].iloc[-1])
         ended = "Enter" if source.done else "time limit"
         self.log(
             f"recorded {stem.name} ({shown}, method {spec.method}): {seconds:.1f} s, ended by "
-            f"{ended}, loop rate {100 * rate:.1f}% of real time"
+            f"{ended}, loop rate {100 * rate:.1f}% of real time (slowest 2 s "
+            f"{100 * slowest:.1f}%)"
         )
-        if rate < SLOW or window.slow_ticks:
+        if min(rate, slowest) < SLOW:
             self.log(
                 f"WARNING: the loop ran below {100 * SLOW:.0f}% of real time in {stem.name} "
-                f"({100 * rate:.1f}% over the trial): the arm moved slower than commanded"
+                f"({100 * rate:.1f}% over the trial, {100 * slowest:.1f}% in its slowest 2 s): "
+                "the arm moved slower than commanded"
             )
         window.end_trial("Finished. Saved." if source.done else "Time is up. Saved.")
         return None
