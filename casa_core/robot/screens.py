@@ -33,8 +33,7 @@ MARGIN, CHAR_WIDTH, LINE_HEIGHT = 24, 7.6, 17.0
 INK, WARN, GO = (0.05, 0.05, 0.1), (0.75, 0.05, 0.05), (0.05, 0.5, 0.1)
 HALO_RGBA = (1.0, 0.8, 0.0, 0.45)
 PATH_RGB = (1.0, 0.45, 0.0)
-#: 1024 x 768 pixels, at least 20 ms between frames (pybullet's default, 4 ms, lets a
-#: software renderer take whole cores from the loop and the learning).
+#: 1024 x 768, >= 20 ms a frame (pybullet's 4 ms lets a software renderer take whole cores).
 GUI_OPTIONS = "--width=1024 --height=768 --minGraphicsUpdateTimeMs=20000"
 #: A loop slower than this fraction of real time is warned about.
 SLOW = 0.95
@@ -69,10 +68,8 @@ class SessionWindow:
     ----------
     scene : Scene
     notify : callable, optional
-        ``notify(kind)`` each time a screen is shown (``instructions``, ``preview``,
-        ``countdown``, ``trial``, ``end-of-trial``, ``likert``, ``learning``, ``pause``,
-        ``getting-ready``,
-        ``confirm-abort``, ``end``): the session log, or a test driving the window.
+        ``notify(kind)`` once a screen is drawn (``instructions``, ``preview``, ``trial``,
+        ``likert``, ``learning``, ``pause``...): the console, or a test driving the window.
     """
 
     def __init__(self, scene: Scene, *, notify: Callable[[str], None] | None = None):
@@ -81,7 +78,6 @@ class SessionWindow:
         self.rate = self.slowest = 1.0
         self._open()
 
-    # -- the window --------------------------------------------------------------------
     def _open(self) -> None:
         self.sim = ArmSimulation(self.scene, gui=True, gui_options=GUI_OPTIONS)
         Window(self.sim, realtime=True)  # the camera behind the robot, no pybullet panels
@@ -114,8 +110,7 @@ class SessionWindow:
         self._open()
 
     def close(self) -> None:
-        if getattr(self, "sim", None) is not None:
-            self.sim.close()
+        self.sim.close()  # idempotent
 
     def _call(self, function, *args, **kwargs):
         """A pybullet call on this window; :class:`WindowClosed` if it is gone."""
@@ -200,7 +195,6 @@ class SessionWindow:
         self.poll()  # keys pressed before the trial started do not count
         return KeyboardKeys(self.client, pause_keys=(PAUSE,))
 
-    # -- screens -----------------------------------------------------------------------
     def instructions(self, title: str, body: str, task: str) -> str:
         """The next trial's instructions; ``"start"`` on Enter, ``"pause"`` on P."""
         self.sim.reset(self.scene.start_state)
@@ -261,8 +255,9 @@ class SessionWindow:
         self.highlight(task)
         self._go = self.big("GO", GO)
         self.write(f"Keys: {HELP}", self.height - 80, size=1.2)
-        self._banner = self._warning = None
-        self._clock = time.perf_counter()
+        self._warning = None
+        self._banner = self._replace(None, self._banner_text(0.0), 30, INK)
+        self._clock = time.perf_counter()  # after drawing: the first tick is not late
         self._walls: list[float] = []
         self.rate = self.slowest = 1.0
         self.notify("trial")
@@ -285,9 +280,8 @@ class SessionWindow:
         tick = int(round(t / dt))
         if tick == 20:
             self._call(p.removeUserDebugItem, self._go)
-        if tick % 20 == 0:
-            banner = f"time {t:3.0f} s          Enter: finished          P: pause"
-            self._banner = self._replace(self._banner, banner, 30, INK)
+        if tick % 20 == 0 and tick > 0:
+            self._banner = self._replace(self._banner, self._banner_text(t), 30, INK)
             if slow:
                 warning = f"This computer runs slower than real time ({100 * recent_rate:.0f}%)."
                 self._warning = self._replace(self._warning, warning, 56, WARN)
@@ -295,6 +289,12 @@ class SessionWindow:
         if delay > 0:
             time.sleep(delay)
         self.rate = (t + dt) / (time.perf_counter() - self._clock)
+        if len(self._walls) < 40:  # no 2 s yet: the trial so far is its slowest stretch
+            self.slowest = self.rate
+
+    @staticmethod
+    def _banner_text(t: float) -> str:
+        return f"time {t:3.0f} s          Enter: finished          P: pause"
 
     def _replace(self, item: int | None, text: str, top: float, color) -> int:
         """One line at pixel row ``top`` in place of ``item``; the new item's id."""
