@@ -24,7 +24,7 @@ import pandas as pd
 import pytest
 
 from casa_core.config import DEFAULT_CONFIG, load_config
-from casa_core.io import SURVEYS_NAME, read_surveys, validate_paths
+from casa_core.io import SURVEYS_NAME, read_surveys, read_trial, validate_paths
 from casa_core.scene import load_scene
 from casa_core.study import protocol, session_texts
 from casa_core.study.closed_loop import TrialResult
@@ -474,6 +474,9 @@ def test_a_whole_session_in_a_real_window_resumes_after_a_kill_and_validates(tmp
     assert sum(" recorded " in line for line in second) == len(plan) - 5
     assert sorted(p.stem for p in folder.glob("*.json")) == sorted(plan)
     assert sorted(p.stem for p in folder.glob("*.csv") if p.name != SURVEYS_NAME) == sorted(plan)
+    # The keys the operator held (Up: away from the robot) reached the logs.
+    held = pd.concat([read_trial(folder / stem)[1]["keys"] for stem in plan])
+    assert held.str.contains("x+", regex=False).any()
     answers = read_surveys(folder / SURVEYS_NAME)
     assert len(answers) == 3 * 11 and (answers["source"] == "human").all()
     # Counterbalancing printed in the log (participant 3: order 2 of the simulated study's).
