@@ -13,6 +13,10 @@ import numpy as np
 from casa_core.scene import Scene
 from casa_core.vocabulary import TASKS
 
+#: The familiarization's practice target: a goal of its own, not the Known Goal's green,
+#: so that practice does not rehearse the task that follows.
+PRACTICE_GOAL = "purple"
+
 
 def task_waypoints(task: str, scene: Scene) -> np.ndarray:
     """Waypoints ``(n, 4)`` of ``[x, y, z, rot]`` that the task's reference visits in order.
@@ -22,9 +26,13 @@ def task_waypoints(task: str, scene: Scene) -> np.ndarray:
     >>> from casa_core.scene import load_scene
     >>> task_waypoints("unknown_skill", load_scene())[:, 3].tolist()
     [0.0, 0.0, 1.8]
+    >>> task_waypoints("familiarization", load_scene())[-1].tolist()  # the purple goal
+    [0.22, -0.4, 0.18, 0.0]
     """
     start = scene.start_state
-    if task in ("known_goal", "familiarization"):
+    if task == "familiarization":
+        return np.array([start, [*scene.goals[PRACTICE_GOAL], 0.0]])
+    if task == "known_goal":
         return np.array([start, [*scene.goals["green"], 0.0]])
     if task == "unknown_goal":
         return np.array([start, [*scene.goals["red"], 0.0]])

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import copy
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 import torch
@@ -69,6 +69,9 @@ class MaxEntIRL:
         Network, optimizer, convergence and planner settings (defaults if None).
     seed : int
         Seed of the network's initialisation.
+    progress : callable, optional
+        ``progress(iteration, max_iterations)`` after each IRL iteration (a progress
+        bar); an exception it raises stops the training.
 
     Attributes
     ----------
@@ -124,10 +127,18 @@ class MaxEntIRL:
     [1, 2]
     """
 
-    def __init__(self, name: str = "learned", *, config: IRLConfig | None = None, seed: int = 0):
+    def __init__(
+        self,
+        name: str = "learned",
+        *,
+        config: IRLConfig | None = None,
+        seed: int = 0,
+        progress: Callable[[int, int], None] | None = None,
+    ):
         self.name = name
         self.config = config
         self.seed = seed
+        self.progress = progress
 
     def fit(self, demonstrations, objects: Mapping) -> MaxEntIRL:
         """Learn the intent from demonstrations in a scene of named objects.
@@ -167,7 +178,7 @@ class MaxEntIRL:
                 seed=self.seed,
             )
             training = _Training(network, positions, waypoints, n_steps, config)
-            history, candidates, converged = training.run()
+            history, candidates, converged = training.run(self.progress)
             start = waypoints[:, 0, :].mean(axis=0)
 
             def build(weights_of: torch.nn.Module, offset: float):
@@ -231,7 +242,7 @@ class _Training:
     def per_state(self, states: torch.Tensor) -> torch.Tensor:
         return bounded_cost(self.logits(states), self.config.cost_scale)
 
-    def run(self) -> tuple[list[dict], list[tuple], bool]:
+    def run(self, progress=None) -> tuple[list[dict], list[tuple], bool]:
         """Iterate to convergence; the history, every iteration's candidate and convergence.
 
         A candidate is ``(match, iteration, weights, D^phi states)``, the weights being
@@ -251,6 +262,8 @@ class _Training:
             samples = plan.states
             candidates.append((_match(history[-1]), iteration, planned_under, plan.states))
             converged = _converged(history[-1], config)
+            if progress is not None:
+                progress(iteration, config.max_iterations)
             if iteration >= config.min_iterations and converged:
                 break
         history[-1]["converged"] = converged

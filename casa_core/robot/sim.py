@@ -115,6 +115,9 @@ class ArmSimulation:
     settings : ControllerSettings, optional
         Controller gains; default :class:`ControllerSettings` with the scene's
         ``teleop.dt`` as the tick.
+    gui_options : str
+        pybullet's window options (``p.connect``'s ``options``), e.g.
+        ``"--width=1024 --height=768"``.
 
     Notes
     -----
@@ -125,7 +128,12 @@ class ArmSimulation:
     """
 
     def __init__(
-        self, scene: Scene, *, gui: bool = False, settings: ControllerSettings | None = None
+        self,
+        scene: Scene,
+        *,
+        gui: bool = False,
+        settings: ControllerSettings | None = None,
+        gui_options: str = "",
     ):
         if settings is None:
             settings = ControllerSettings(dt=scene.teleop.dt)
@@ -138,7 +146,7 @@ class ArmSimulation:
                 "the pybullet window needs a display, but DISPLAY is not set: run in a "
                 "desktop session (or under xvfb-run for tests)"
             )
-        self.client = p.connect(p.GUI if gui else p.DIRECT)
+        self.client = p.connect(p.GUI, options=gui_options) if gui else p.connect(p.DIRECT)
         if self.client < 0:
             raise RuntimeError("pybullet could not connect (no display for the GUI?)")
         try:

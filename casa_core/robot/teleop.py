@@ -43,33 +43,73 @@ KEY_BINDINGS = {
     ord("d"): "rot-",
 }
 FINISH_KEYS = (p.B3G_RETURN,)
-HELP = "arrows: x/y   W/S: up/down   A/D: pour/back   Enter: finish"
+HELP = "arrow keys: move the cup   W / S: up / down   A / D: tilt to pour / back   Enter: finished"
 #: Camera behind the robot, looking along its +x axis (screen right is -y).
 #: Pitched down enough that the arm does not hide the purple goal.
 CAMERA = {"cameraDistance": 1.25, "cameraYaw": -90.0, "cameraPitch": -50.0}
 CAMERA_TARGET = [0.4, -0.05, 0.1]
 
 
+class KeyLatch:
+    """Which keys are held and which were pressed, from successive ``p.getKeyboardEvents``.
+
+    pybullet reports a key pressed and released between two reads as released only
+    (``KEY_WAS_RELEASED`` without ``KEY_WAS_TRIGGERED``) when both happen within one of
+    its frames: such a release of a key not seen down at the last read counts as a press,
+    so that a tap as short as one frame is never lost.
+
+    Examples
+    --------
+    >>> latch = KeyLatch()
+    >>> latch.update({13: p.KEY_WAS_RELEASED})  # a tap whose press pybullet dropped
+    (frozenset({13}), frozenset({13}))
+    >>> latch.update({65: p.KEY_IS_DOWN | p.KEY_WAS_TRIGGERED})
+    (frozenset({65}), frozenset({65}))
+    >>> latch.update({65: p.KEY_WAS_RELEASED})  # the end of a held key: no new press
+    (frozenset(), frozenset())
+    """
+
+    def __init__(self):
+        self._down: frozenset[int] = frozenset()
+
+    def update(self, events: dict) -> tuple[frozenset[int], frozenset[int]]:
+        """``(held, pressed)`` key codes since the last update."""
+        pressed = frozenset(
+            code
+            for code, state in events.items()
+            if state & p.KEY_WAS_TRIGGERED
+            or (state & p.KEY_WAS_RELEASED and code not in self._down)
+        )
+        down = frozenset(code for code, state in events.items() if state & p.KEY_IS_DOWN)
+        self._down = down
+        return down | pressed, pressed
+
+
 class KeyboardKeys:
     """Held keys read from a pybullet window with ``p.getKeyboardEvents`` every tick.
 
     A key counts as held during a tick if it is down or was pressed since the last
-    tick (so a quick tap is not lost). Enter ends the trial (``done``).
+    tick (:class:`KeyLatch`: a one-frame tap is not lost). Enter ends the trial
+    (``done``); a key of ``pause_keys`` ends it too, with ``paused`` set.
     """
 
-    def __init__(self, client: int):
+    def __init__(self, client: int, *, pause_keys: tuple[int, ...] = ()):
         self.client = client
         self.done = False
+        self.paused = False
+        self.pause_keys = pause_keys
+        self._latch = KeyLatch()
 
     def keys(self, t: float, state) -> frozenset[str]:
         events = p.getKeyboardEvents(physicsClientId=self.client)
-        if any(events.get(code, 0) & p.KEY_WAS_TRIGGERED for code in FINISH_KEYS):
+        held, pressed = self._latch.update(events)
+        if pressed.intersection(self.pause_keys):
+            self.done = self.paused = True
+            return frozenset()
+        if pressed.intersection(FINISH_KEYS):
             self.done = True
             return frozenset()
-        pressed = p.KEY_IS_DOWN | p.KEY_WAS_TRIGGERED
-        return frozenset(
-            name for code, name in KEY_BINDINGS.items() if events.get(code, 0) & pressed
-        )
+        return frozenset(name for code, name in KEY_BINDINGS.items() if code in held)
 
 
 class Window:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from casa_core.io import find_files, load_meta, read_trial
@@ -87,13 +87,15 @@ def learn_to_library(
     participant: str | None = None,
     config: IRLConfig | None = None,
     phase: str | None = "demonstration",
+    progress: Callable[[int, int], None] | None = None,
 ) -> tuple[Path, list[dict], float]:
     """Learn intent ``name`` from the logs in ``demos_folder`` and save it in ``library``.
 
     ``task`` and ``phase`` filter the logs (:func:`read_demonstrations`); the
     scene ``objects`` (name -> position) are the cost's features
     (:meth:`MaxEntIRL.fit`). The task and participant stored default to those of
-    the logs when they all agree (else ""). Returns the file, the training history
+    the logs when they all agree (else ""); ``progress`` is
+    :class:`~casa_core.learning.maxent.MaxEntIRL`'s. Returns the file, the training history
     and the training time in seconds.
     """
     config = IRLConfig() if config is None else config
@@ -105,7 +107,7 @@ def learn_to_library(
         return values.pop() if len(values) == 1 else ""
 
     began = time.perf_counter()
-    learner = MaxEntIRL(name, config=config, seed=seed).fit(demos, objects)
+    learner = MaxEntIRL(name, config=config, seed=seed, progress=progress).fit(demos, objects)
     seconds = time.perf_counter() - began
     path = save_intent(
         library,

@@ -66,6 +66,25 @@ def demonstrations(task: str, n: int = DEMONSTRATIONS) -> list[TrialSpec]:
     return [TrialSpec(task, "NA", "demonstration", repeat) for repeat in range(n)]
 
 
+def demonstration_tasks(when: str, detected: dict[str, bool]) -> list[str]:
+    """The unknown tasks whose demonstrations are asked for, in the order they are run.
+
+    ``when`` is ``"always"`` (the paper's protocol: every unknown task) or
+    ``"detected"`` (only the tasks in which CASA flagged misspecification, ``detected``
+    mapping task -> flag; a task missing from it flagged nothing).
+
+    Examples
+    --------
+    >>> demonstration_tasks("always", {})
+    ['unknown_goal', 'unknown_skill']
+    >>> demonstration_tasks("detected", {"unknown_goal": False, "unknown_skill": True})
+    ['unknown_skill']
+    """
+    if when not in ("always", "detected"):
+        raise ValueError(f"demonstrations_when must be 'always' or 'detected', got {when!r}")
+    return [task for task in UNKNOWN_TASKS if when == "always" or detected.get(task, False)]
+
+
 def after_learning() -> list[TrialSpec]:
     """Phase 4: CASA with the learned intents."""
     return [TrialSpec(task, "CASA", "after_learning") for task in UNKNOWN_TASKS]

@@ -140,9 +140,7 @@ def simulate_before_learning(
             result.write(out_dir / spec.stem)
             written.append(out_dir / spec.stem)
         stream = len(specs) + 1
-        for task in UNKNOWN_TASKS:
-            if simulation["demonstrations_when"] == "detected" and not detected.get(task):
-                continue
+        for task in protocol.demonstration_tasks(simulation["demonstrations_when"], detected):
             for spec in protocol.demonstrations(task, simulation["demonstrations"]):
                 rng = np.random.default_rng([seed, index, stream])
                 stream += 1

@@ -22,6 +22,7 @@ from casa_core.scene import Scene
 from casa_core.study.closed_loop import default_phase, run_trial
 from casa_core.study.key_sources import KeySource
 from casa_core.study.protocol import TrialSpec, demonstrations, misspecification_detected
+from casa_core.vocabulary import TASK_LABELS
 
 
 def run_teleop(
@@ -72,7 +73,8 @@ def run_teleop(
     repeat : int
         Which demonstration this is (0-based), for the log's name.
     title : str, optional
-        Shown in the window before the countdown; default task and method.
+        Shown in the window before the countdown; default the task's name (never the
+        method's).
     inference : Preset or str, default "casa"
         The inference preset (:mod:`casa_core.presets`).
     assistant_options : dict, optional
@@ -102,7 +104,8 @@ def run_teleop(
     with ArmSimulation(scene, gui=gui) as sim:
         window = Window(sim, realtime)
         source = KeyboardKeys(sim.client) if key_source is None else key_source
-        window.intro(title or f"{task}  ({method})", countdown)
+        # The method is not shown: the participant must not know which one drives.
+        window.intro(title or TASK_LABELS[task], countdown)
         started = datetime.now(UTC).isoformat(timespec="seconds")
         result = run_trial(
             scene,
