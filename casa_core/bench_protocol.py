@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.scene import Scene
 
 #: Target of each benchmark key: (comparison, bound). Medians, CPU time of one core.
@@ -104,7 +105,7 @@ def participant_benchmark(scene: Scene, *, config: dict, participants=(0,)) -> d
                     index,
                     scene,
                     simulation=simulation,
-                    learned=sorted((work / "library").rglob("*.intent.json")),
+                    learned=sorted((work / "library").rglob(f"*{INTENT_SUFFIX}")),
                     before_dir=work / "before",
                     out_dir=work / "after",
                     inference=inference,

@@ -29,7 +29,7 @@ from pathlib import Path
 import pandas as pd
 
 from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_surveys, read_trial, write_surveys
-from casa_core.io.contract import SINGLE_TRIAL_PHASES
+from casa_core.io.contract import INTENT_SUFFIX, SINGLE_TRIAL_PHASES
 from casa_core.presets import Preset
 from casa_core.scene import Scene
 from casa_core.study import protocol
@@ -226,7 +226,7 @@ class SessionRecord:
         return protocol.demonstration_tasks(self.settings.demonstrations_when, flags)
 
     def intent_file(self, task: str) -> Path:
-        return self.library / f"{LEARNED_NAMES[task]}.intent.json"
+        return self.library / f"{LEARNED_NAMES[task]}{INTENT_SUFFIX}"
 
     def learned_files(self) -> list[Path]:
         """The learned intents on disk, in the tasks' order."""

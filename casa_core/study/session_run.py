@@ -211,14 +211,13 @@ class _Runner:
     def _trial(self, spec) -> str | None:
         window, settings = self.window, self.settings
         label = label_of(spec, self.record.index)
-        if spec.phase == "after_learning":
-            self._learned_intents()
+        # Planned before the instructions, on a waiting screen of its own.
+        intents = self._learned_intents() if spec.phase == "after_learning" else None
         title, body = texts.instructions(spec, label, demonstrations=settings.demonstrations)
         if window.instructions(title, body, spec.task) == "pause":
             return "pause"
         window.preview(spec.task, intended_trajectory(spec.task, self.scene), settings.preview)
         window.countdown(settings.countdown)
-        intents = self._learned_intents() if spec.phase == "after_learning" else None
         source = window.keyboard()
         window.start_trial(spec.task)
         started = datetime.now(UTC).isoformat(timespec="seconds")
