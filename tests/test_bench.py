@@ -58,8 +58,11 @@ def test_time_assistance_step_and_table(scene):
 
 
 def test_trial_realtime_factor_runs_the_unknown_goal_trial(scene):
-    cpu, wall = bench.trial_realtime_factor(scene, duration=1.0, repeats=1)
-    assert cpu > 0 and wall > 0
+    for reuse in (True, False):
+        cpu, wall = bench.trial_realtime_factor(
+            scene, duration=1.0, repeats=1, reuse_simulation=reuse
+        )
+        assert cpu > 0 and wall > 0
 
 
 def test_intent_sets_are_timed_together_and_say_whether_the_robot_assists(scene):

@@ -124,7 +124,7 @@ def _add_bench(commands) -> None:
         description="Print a table and notes on reading it; with --json, also one JSON object "
         "on the last line with step_us_goal3, step_us_neural1, scaling (n_intents, step_us, "
         "assisting), trial_realtime_factor, trial_realtime_factor_wall, "
-        "trial_realtime_factor_reused_sim, participant_cpu_s, irl_s (and their _all lists) "
+        "trial_realtime_factor_new_sim, participant_cpu_s, irl_s (and their _all lists) "
         "and targets_met (CPU time of one thread or process; see casa_core.bench).",
         **example("casa bench --json | tail -n 1 > bench.json"),
     )
