@@ -1,4 +1,4 @@
-"""The learned per-state cost and its gradient in numpy, for planning.
+"""The learned per-state cost and its gradient without autograd, for planning.
 
 The planner evaluates a learned cost and its gradient in the states thousands of
 times per learned intent, on a few hundred states at a time. For a network this
@@ -6,12 +6,13 @@ small, torch's per-operation and autograd overhead costs several times the
 arithmetic; :class:`NumpyStateCost` computes the same formula
 (:mod:`casa_core.learning.features`: features in float64, the network in float32,
 the sigmoid in float64) and its gradient by hand (the chain rule through the
-network and the features), with no autograd. Training the network's weights stays in
-torch.
+network and the features), with no autograd: the network's four matrix products in
+torch, everything between them in compiled loops (:mod:`casa_core.learning._kernels`),
+into work arrays kept per row count. Training the network's weights stays in torch.
 
 The values agree with the torch formula to float32 rounding (the matrix products
-may sum in another order): ``tests/test_irl.py`` checks costs and gradients against
-torch's autograd.
+may sum in another order): ``tests/test_speed_equivalence.py`` checks costs and
+gradients against torch's autograd.
 
 Examples
 --------

@@ -27,9 +27,10 @@ cheapest iterate met is returned (on a non-convex cost, Adam may climb out of a
 good initial guess). With ``limit="norm"`` Adam's second moment is shared by the
 three position axes so that a step keeps the gradient's direction.
 
-The optimizer is deterministic (no random numbers, fixed order of operations),
-runs on the CPU and optimizes a batch of trajectories at once: each row may have
-its own start and, through the cost function, its own cost. Batching pays where
+The optimizer is deterministic (no random numbers, fixed order of operations; its
+per-iteration loops are compiled, :mod:`casa_core.planning._kernels`), runs on the
+CPU and optimizes a batch of trajectories at once: each row may have its own start
+and, through the cost function, its own cost. Batching pays where
 one network evaluates many rows: IRL plans D^phi for all demonstrations in one
 batch, and a learned intent's cold plan tries all its starting guesses in one.
 Different intents are planned one by one
