@@ -10,7 +10,9 @@ plans with the torch cost.
 
 from __future__ import annotations
 
+import copy
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -99,6 +101,20 @@ def test_numpy_cost_results_outlive_its_work_arrays():
     np.testing.assert_array_equal(values, kept[0])
     np.testing.assert_array_equal(grad, kept[1])
     np.testing.assert_array_equal(fast.value_and_grad(first)[1], kept[1])
+
+
+def test_a_copied_numpy_cost_computes_what_the_original_does():
+    # The assistant is deep-copied (casa_core.bench), pickling is how a cost leaves a
+    # process: each copy must compute with its own work arrays.
+    fast = NumpyStateCost(network(), objects=POSITIONS, length_scale=0.1, cost_scale=10.0)
+    rng = np.random.default_rng(8)
+    first, second = random_states(rng), random_states(rng)
+    fast.value_and_grad(first)
+    for copied in (copy.deepcopy(fast), pickle.loads(pickle.dumps(fast))):
+        for values, want in zip(
+            copied.value_and_grad(second), fast.value_and_grad(second), strict=True
+        ):
+            np.testing.assert_array_equal(values, want)
 
 
 def test_numpy_cost_refuses_another_network():

@@ -120,6 +120,11 @@ class NumpyStateCost:
         self.offset = float(offset)
         self._buffers: dict[int, _Buffers] = {}
 
+    def __getstate__(self):
+        # A copy (deepcopy, pickle) gets its own work arrays: copied, a tensor and the
+        # numpy view of its memory would no longer share it.
+        return {**self.__dict__, "_buffers": {}}
+
     def _forward(self, states: np.ndarray, *, with_slopes: bool):
         states = np.asarray(states, dtype=float)
         shape = states.shape[:-1]
