@@ -1,4 +1,4 @@
-"""The learned per-state cost and its gradient in numpy, for planning.
+"""The learned per-state cost and its gradient without autograd, for planning.
 
 The planner evaluates a learned cost and its gradient in the states thousands of
 times per learned intent, on a few hundred states at a time. For a network this
@@ -6,12 +6,13 @@ small, torch's per-operation and autograd overhead costs several times the
 arithmetic; :class:`NumpyStateCost` computes the same formula
 (:mod:`casa_core.learning.features`: features in float64, the network in float32,
 the sigmoid in float64) and its gradient by hand (the chain rule through the
-network and the features), with no autograd. Training the network's weights stays in
-torch.
+network and the features), with no autograd: the network's four matrix products in
+torch, everything between them in compiled loops (:mod:`casa_core.learning._kernels`),
+into work arrays kept per row count. Training the network's weights stays in torch.
 
 The values agree with the torch formula to float32 rounding (the matrix products
-may sum in another order): ``tests/test_irl.py`` checks costs and gradients against
-torch's autograd.
+may sum in another order): ``tests/test_speed_equivalence.py`` checks costs and
+gradients against torch's autograd.
 
 Examples
 --------
@@ -38,17 +39,20 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from casa_core.learning import _kernels
 from casa_core.rotation import R0
 
 # R(rot) = cos(rot) A + sin(rot) B + C, row-major (casa_core.rotation.end_effector_rotation).
 _ZERO = np.zeros(3)
-_A = np.stack([R0[:, 0], R0[:, 1], _ZERO], axis=-1).reshape(9)
-_B = np.stack([R0[:, 1], -R0[:, 0], _ZERO], axis=-1).reshape(9)
-_C = np.stack([_ZERO, _ZERO, R0[:, 2]], axis=-1).reshape(9)
-
-
-_leaky_relu = torch.nn.functional.leaky_relu
-_leaky_relu_backward = torch.ops.aten.leaky_relu_backward
+_BASIS = np.stack(
+    [
+        np.stack([R0[:, 0], R0[:, 1], _ZERO], axis=-1).reshape(9),
+        np.stack([R0[:, 1], -R0[:, 0], _ZERO], axis=-1).reshape(9),
+        np.stack([_ZERO, _ZERO, R0[:, 2]], axis=-1).reshape(9),
+    ]
+)
+#: Row counts whose work buffers a cost keeps (a planner meets a few sizes again and again).
+_BUFFERED_SIZES = 32
 
 
 def _linear_layers(network: torch.nn.Module) -> tuple[list, float]:
@@ -65,11 +69,29 @@ def _linear_layers(network: torch.nn.Module) -> tuple[list, float]:
     return layers, float(slopes.pop())
 
 
+class _Buffers:
+    """Work arrays for ``n`` rows: each a numpy array and, where torch writes it, a tensor."""
+
+    def __init__(self, n: int, n_inputs: int, hidden: int, k: int):
+        def pair(*shape):
+            tensor = torch.empty(shape, dtype=torch.float32)
+            return tensor, tensor.numpy()
+
+        (self.inputs_t, self.inputs) = pair(n, n_inputs)
+        (self.h1_t, self.h1), (self.a1_t, self.a1) = pair(n, hidden), pair(n, hidden)
+        (self.h2_t, self.h2), (self.a2_t, self.a2) = pair(n, hidden), pair(n, hidden)
+        (self.logits_t, self.logits), (self.slopes_t, self.slopes) = pair(n), pair(n)
+        (self.d_h2_t, self.d_h2), (self.d_h1_t, self.d_h1) = pair(n, hidden), pair(n, hidden)
+        (self.d_inputs_t, self.d_inputs) = pair(n, n_inputs)
+        self.cos_sin, self.distances = np.empty((n, 2)), np.empty((n, k))
+        self.no_slopes = self.slopes[:0]
+
+
 class NumpyStateCost:
     """``cost_scale * sigmoid(network(features(s))) - offset`` and its gradient, in numpy.
 
     A snapshot of the network's weights at construction: build a new one after the
-    weights change.
+    weights change. Not reentrant (it reuses its work arrays): one call at a time.
 
     Parameters
     ----------
@@ -84,63 +106,78 @@ class NumpyStateCost:
     """
 
     def __init__(self, network, *, objects, length_scale: float, cost_scale: float, offset=0.0):
-        layers, self._slope = _linear_layers(network)
+        layers, slope = _linear_layers(network)
         (self._w1, self._b1), (self._w2, self._b2), (w3, b3) = layers
         self._w3, self._b3 = w3[0].contiguous(), b3
+        self._w3_np = self._w3.numpy()
         # Transposed once, contiguous: the forward pass multiplies by W^T.
         self._w1t, self._w2t = self._w1.T.contiguous(), self._w2.T.contiguous()
-        self.objects = np.asarray(objects, dtype=float).reshape(-1, 3)
+        # float32, as torch's leaky ReLU multiplies by it.
+        self._slope = np.float32(slope)
+        self.objects = np.ascontiguousarray(np.asarray(objects, dtype=float).reshape(-1, 3))
         self.length_scale = float(length_scale)
-        k = len(self.objects)
-        # d features / d position of the linear features (position, then each offset).
-        self._linear_jacobian = np.vstack([np.eye(3)] + [-np.eye(3)] * k) / self.length_scale
-        self._distance_columns = slice(12 + 3 * k, 12 + 4 * k)
-        self._rotation_basis = np.column_stack([_A, _B])
         self.cost_scale = float(cost_scale)
         self.offset = float(offset)
+        self._buffers: dict[int, _Buffers] = {}
 
-    def _forward(self, states: np.ndarray):
+    def __getstate__(self):
+        # A copy (deepcopy, pickle) gets its own work arrays: copied, a tensor and the
+        # numpy view of its memory would no longer share it.
+        return {**self.__dict__, "_buffers": {}}
+
+    def _forward(self, states: np.ndarray, *, with_slopes: bool):
         states = np.asarray(states, dtype=float)
         shape = states.shape[:-1]
-        flat = states.reshape(-1, 4)
-        n, k = len(flat), len(self.objects)
-        cos, sin = np.cos(flat[:, 3:4]), np.sin(flat[:, 3:4])
-        offsets = self.objects[None, :, :] - flat[:, None, :3]  # (n, K, 3), feature order
-        dx, dy, dz = offsets[..., 0], offsets[..., 1], offsets[..., 2]
-        distances = np.sqrt(dx * dx + dy * dy + dz * dz + 1e-6)
-        inputs = np.empty((n, 12 + 4 * k), dtype=np.float32)
-        inputs[:, :9] = cos * _A + sin * _B + _C
-        lengths = np.concatenate([flat[:, :3], offsets.reshape(n, 3 * k), distances], axis=1)
-        with np.errstate(over="ignore"):  # beyond float32's range: inf, as torch casts it
-            inputs[:, 9:] = lengths / self.length_scale
+        flat = np.ascontiguousarray(states.reshape(-1, 4))
+        n = len(flat)
+        work = self._buffers.get(n)
+        if work is None:
+            if len(self._buffers) >= _BUFFERED_SIZES:
+                self._buffers.clear()
+            work = self._buffers[n] = _Buffers(
+                n, self._w1.shape[1], self._w1.shape[0], len(self.objects)
+            )
+        _kernels.features(
+            flat,
+            self.objects,
+            self.length_scale,
+            _BASIS,
+            work.inputs,
+            work.cos_sin,
+            work.distances,
+        )
         # No autograd context needed: neither the weights nor the inputs require grad.
-        h1 = torch.addmm(self._b1, torch.from_numpy(inputs), self._w1t)
-        h2 = torch.addmm(self._b2, _leaky_relu(h1, self._slope), self._w2t)
-        logits = torch.addmv(self._b3, _leaky_relu(h2, self._slope), self._w3).numpy()
-        sigmoid = 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
-        values = (self.cost_scale * sigmoid - self.offset).reshape(shape)
-        cache = (shape, cos, sin, flat[:, :3], distances, h1, h2, sigmoid)
-        return values, cache
+        torch.addmm(self._b1, work.inputs_t, self._w1t, out=work.h1_t)
+        _kernels.leaky_relu(work.h1, self._slope, work.a1)
+        torch.addmm(self._b2, work.a1_t, self._w2t, out=work.h2_t)
+        _kernels.leaky_relu(work.h2, self._slope, work.a2)
+        torch.addmv(self._b3, work.a2_t, self._w3, out=work.logits_t)
+        values = np.empty(n)
+        slopes = work.slopes if with_slopes else work.no_slopes
+        _kernels.costs(work.logits, self.cost_scale, self.offset, values, slopes)
+        return values.reshape(shape), shape, flat, work
 
     def __call__(self, states) -> np.ndarray:
         """Per-state costs ``(...)`` of states ``(..., 4)``."""
-        return self._forward(states)[0]
+        return self._forward(states, with_slopes=False)[0]
 
     def value_and_grad(self, states) -> tuple[np.ndarray, np.ndarray]:
         """Per-state costs ``(...)`` and the gradient of their sum in the states ``(..., 4)``."""
-        values, (shape, cos, sin, position, distances, h1, h2, sigmoid) = self._forward(states)
-        slope_of_sigmoid = self.cost_scale * sigmoid * (1.0 - sigmoid)
-        d_logits = torch.from_numpy(slope_of_sigmoid.astype(np.float32))
+        values, shape, flat, work = self._forward(states, with_slopes=True)
         # The network's backward pass, as autograd computes it.
-        d_h2 = _leaky_relu_backward(torch.outer(d_logits, self._w3), h2, self._slope, False)
-        d_h1 = _leaky_relu_backward(d_h2.mm(self._w2), h1, self._slope, False)
-        d_inputs = d_h1.mm(self._w1).numpy().astype(np.float64)
-        # The features' gradient as products with constant matrices (few numpy calls).
-        along = d_inputs[:, self._distance_columns] / (self.length_scale * distances)
-        grad = np.empty((len(d_inputs), 4))
-        # Position: its own columns and the offsets' (linear), then the distances'.
-        grad[:, :3] = d_inputs[:, 9 : self._distance_columns.start] @ self._linear_jacobian
-        grad[:, :3] -= along @ self.objects - position * along.sum(axis=1, keepdims=True)
-        turned = d_inputs[:, :9] @ self._rotation_basis  # (d R . A, d R . B)
-        grad[:, 3] = cos[:, 0] * turned[:, 1] - sin[:, 0] * turned[:, 0]
+        _kernels.output_backward(work.slopes, self._w3_np, work.h2, self._slope, work.d_h2)
+        torch.mm(work.d_h2_t, self._w2, out=work.d_h1_t)
+        _kernels.leaky_relu_backward(work.d_h1, work.h1, self._slope)
+        torch.mm(work.d_h1_t, self._w1, out=work.d_inputs_t)
+        grad = np.empty((len(flat), 4))
+        _kernels.features_backward(
+            work.d_inputs,
+            flat,
+            self.objects,
+            self.length_scale,
+            _BASIS,
+            work.cos_sin,
+            work.distances,
+            grad,
+        )
         return values, grad.reshape(*shape, 4)

@@ -27,9 +27,10 @@ cheapest iterate met is returned (on a non-convex cost, Adam may climb out of a
 good initial guess). With ``limit="norm"`` Adam's second moment is shared by the
 three position axes so that a step keeps the gradient's direction.
 
-The optimizer is deterministic (no random numbers, fixed order of operations),
-runs on the CPU and optimizes a batch of trajectories at once: each row may have
-its own start and, through the cost function, its own cost. Batching pays where
+The optimizer is deterministic (no random numbers, fixed order of operations; its
+per-iteration loops are compiled, :mod:`casa_core.planning._kernels`), runs on the
+CPU and optimizes a batch of trajectories at once: each row may have its own start
+and, through the cost function, its own cost. Batching pays where
 one network evaluates many rows: IRL plans D^phi for all demonstrations in one
 batch, and a learned intent's cold plan tries all its starting guesses in one.
 Different intents are planned one by one
@@ -47,6 +48,7 @@ import torch
 
 from casa_core._checks import require_positive
 from casa_core.defaults import DT, HORIZON, ROT_SPEED, SPEED
+from casa_core.planning import _kernels
 
 #: Cost of states: takes a tensor ``(B, n, 4)`` and returns per-state costs ``(B, n)``.
 StateCost = Callable[[torch.Tensor], torch.Tensor]
@@ -144,6 +146,10 @@ class Plan:
     iterations: int
 
 
+#: Adam's decay rates of the first and second moments (as in ``_kernels.adam_step``).
+_BETA1, _BETA2 = 0.9, 0.999
+
+
 def steps_left(time_left: float, dt: float) -> int:
     """Number of whole steps of ``dt`` in ``time_left`` seconds (never negative)."""
     return max(int(np.floor(max(float(time_left), 0.0) / dt + 1e-9)), 0)
@@ -155,50 +161,20 @@ def feasible(starts: np.ndarray, targets: np.ndarray, limit: str) -> np.ndarray:
     Both in units of the per-step limit: a step is clipped to [-1, 1] on each
     axis (``limit="axis"``) or its position part scaled to norm <= 1 and its rot
     clipped (``limit="norm"``). States that are already feasible come back unchanged.
+
+    Examples
+    --------
+    >>> starts = np.zeros((1, 4))
+    >>> feasible(starts, np.array([[[3.0, 0.5, 0.0, -2.0]]]), "axis").tolist()
+    [[[1.0, 0.5, 0.0, -1.0]]]
+    >>> feasible(starts, np.array([[[3.0, 4.0, 0.0, 0.0]]]), "norm").tolist()
+    [[[0.6, 0.8, 0.0, 0.0]]]
     """
-    if limit == "axis" and len(targets) <= _PYTHON_WALK_ROWS:
-        return _walk_axis(np.asarray(starts, dtype=float), targets)
-    # Time first and contiguous: each step's ufuncs then run on one block of memory.
-    by_time = np.ascontiguousarray(np.swapaxes(targets, 0, 1))
-    out = np.empty_like(by_time)
-    previous = np.asarray(starts, dtype=float)
-    step = np.empty_like(previous)
-    for t in range(by_time.shape[0]):
-        np.subtract(by_time[t], previous, out=step)
-        if limit == "axis":
-            np.minimum(step, 1.0, out=step)
-            np.maximum(step, -1.0, out=step)
-        else:
-            norm = np.sqrt((step[:, :3] * step[:, :3]).sum(axis=1, keepdims=True))
-            step[:, :3] /= np.maximum(norm, 1.0)
-            step[:, 3] = np.minimum(np.maximum(step[:, 3], -1.0), 1.0)
-        previous = np.add(previous, step, out=out[t])
-    return np.ascontiguousarray(np.swapaxes(out, 0, 1))
-
-
-#: Up to this many rows the axis-limited walk runs on Python floats: for a few short
-#: rows, numpy's per-call overhead costs more than the arithmetic (the same result).
-_PYTHON_WALK_ROWS = 3
-
-
-def _walk_axis(starts: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """:func:`feasible` with ``limit="axis"`` on Python floats, row by row (bit for bit)."""
+    if limit not in LIMITS:
+        raise ValueError(f"limit must be one of {LIMITS}, got {limit!r}")
+    targets = np.ascontiguousarray(targets, dtype=float)
     out = np.empty_like(targets)
-    for row, (start, target) in enumerate(zip(starts.tolist(), targets.tolist(), strict=True)):
-        x, y, z, r = start
-        walked = []
-        for tx, ty, tz, tr in target:
-            # previous + clip(target - previous, -1, 1), per axis, as the numpy walk.
-            s = tx - x
-            x = x + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
-            s = ty - y
-            y = y + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
-            s = tz - z
-            z = z + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
-            s = tr - r
-            r = r + (1.0 if s > 1.0 else -1.0 if s < -1.0 else s)
-            walked.append((x, y, z, r))
-        out[row] = walked
+    _kernels.walk(np.ascontiguousarray(starts, dtype=float), targets, limit == "norm", out)
     return out
 
 
@@ -291,15 +267,17 @@ def optimize(
     budget = budget if iterations is None else int(iterations)
     states_u = feasible(start_u, guess, config.limit)
     scale_t = torch.as_tensor(scale, dtype=torch.float64)
-    # Adam's moments, written out so that the feasibility step and decay stay explicit.
+    # Adam's moments (written out so that the feasibility step and decay stay explicit),
+    # and the best iterate per row: on a non-convex cost Adam can leave a good guess behind.
     m = np.zeros_like(states_u)
     v = np.zeros_like(states_u)
-    beta1, beta2, eps = 0.9, 0.999, 1e-12
-    iterations = 0
-    # Best iterate per row: on a non-convex cost Adam can leave a good guess behind.
     best_u = states_u.copy()
     best_cost = np.full(batch, np.inf)
     value_and_grad = getattr(state_cost, "value_and_grad", None)
+    # The gradient in the states' units: autograd's already is, the numpy cost's is in metres.
+    grad_scale = np.ones(4) if value_and_grad is None else scale
+    norm = config.limit == "norm"
+    iterations = 0
     for iterations in range(1, budget + 1):  # noqa: B007 (the count is reported)
         if value_and_grad is None:
             x = torch.from_numpy(states_u).requires_grad_(True)
@@ -308,20 +286,23 @@ def optimize(
             row_costs, grad = row_costs.detach().numpy(), grad.numpy()
         else:  # a numpy cost with its own gradient (no autograd)
             per_state, grad = value_and_grad(states_u * scale)
-            row_costs, grad = per_state.sum(axis=1), grad * scale
-        improved = row_costs < best_cost
-        np.copyto(best_cost, row_costs, where=improved)
-        np.copyto(best_u, states_u, where=improved[:, None, None])
-        squared = grad * grad
-        if config.limit == "norm":
-            squared[..., :3] = squared[..., :3].mean(axis=-1, keepdims=True)
-        m = beta1 * m + (1 - beta1) * grad
-        v = beta2 * v + (1 - beta2) * squared
-        m_hat = m / (1 - beta1**iterations)
-        v_hat = v / (1 - beta2**iterations)
-        updated = feasible(start_u, states_u - lr * m_hat / (np.sqrt(v_hat) + eps), config.limit)
-        moved = float(np.abs(updated - states_u).max())
-        states_u = updated
+            row_costs = per_state.sum(axis=1)
+        # Best iterate, Adam step, walk and the largest move, in one compiled loop.
+        moved = _kernels.adam_step(
+            states_u,
+            np.ascontiguousarray(grad, dtype=float),
+            grad_scale,
+            np.ascontiguousarray(row_costs, dtype=float),
+            m,
+            v,
+            best_u,
+            best_cost,
+            start_u,
+            lr,
+            1 - _BETA1**iterations,
+            1 - _BETA2**iterations,
+            norm,
+        )
         lr *= config.decay
         if moved < config.tol:
             break
