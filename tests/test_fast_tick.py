@@ -1,0 +1,104 @@
+"""The compiled control tick and the pouring cost's gradient compute the plain formulas.
+
+The controller's joint velocities (``casa_core.robot.control_kernel``, numba) are held
+to the same formula in plain numpy on pybullet's own Jacobian, over configurations
+across the joint ranges (near limits too), lags beyond ``max_lag`` and commands fast
+enough to hit the joint speed limits.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pybullet as p
+import pytest
+
+from casa_core.robot import kinematics as kin
+from casa_core.robot.control_kernel import joint_velocities, joint_velocities_numpy
+from casa_core.robot.sim import TOOL_LINK, ArmSimulation
+from casa_core.scene import load_scene
+
+
+@pytest.fixture(scope="module")
+def sim():
+    with ArmSimulation(load_scene()) as arm:
+        yield arm
+
+
+def _random_tick(rng, sim, scene):
+    """A configuration, its pose, a reference and a command.
+
+    Half the configurations hold the tool orientation (inverse kinematics of a pose near
+    the start, small commands); the others are random with a joint near its limit and a
+    large orientation error and command, so that the speed limits bind.
+    """
+    if rng.random() < 0.5:
+        pose = scene.start_state + rng.normal(0.0, [0.05, 0.05, 0.05, 0.5])
+        q = kin.inverse_kinematics(pose[:3], pose[3])
+        action = rng.normal(0.0, 0.02, size=4)
+    else:
+        q = kin.HOME_CONFIGURATION + rng.normal(0.0, 0.3, size=7)
+        bounded = np.flatnonzero(np.isfinite(kin.JOINT_LOWER))
+        near = rng.choice(bounded)
+        q[near] = kin.JOINT_LOWER[near] + rng.uniform(0.0, 0.02)
+        q = np.clip(q, kin.JOINT_LOWER + 1e-5, kin.JOINT_UPPER - 1e-5)
+        action = rng.normal(0.0, 0.2, size=4)
+    state = sim.reset([0.0, 0.0, 0.0, 0.0], q=q)
+    reference = state + rng.normal(0.0, 0.01, size=4)  # often beyond max_lag = 0.01
+    return state, reference, action
+
+
+def test_the_compiled_tick_equals_the_numpy_formula(sim):
+    # The same formula; the 6 x 6 solve differs (Cholesky vs LU) by float rounding.
+    rng = np.random.default_rng(0)
+    scaled = 0
+    for _ in range(200):
+        state, reference, action = _random_tick(rng, sim, load_scene())
+        linear, angular = p.calculateJacobian(
+            sim.robot,
+            TOOL_LINK,
+            [0.0] * 3,
+            sim.q.tolist(),
+            [0.0] * 7,
+            [0.0] * 7,
+            physicsClientId=sim.client,
+        )
+        jac = np.array((*linear, *angular))
+        want, want_reference = joint_velocities_numpy(
+            jac, sim.q, state, reference, sim._rotation, action, sim._gains
+        )
+        advanced = reference.copy()
+        got = joint_velocities(
+            linear, angular, sim.q, state, advanced, sim._rotation, action, sim._gains
+        )
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
+        np.testing.assert_array_equal(advanced, want_reference)
+        scaled += bool(np.isclose(np.max(np.abs(want) / kin.JOINT_MAX_SPEED), 1.0))
+    assert 20 < scaled < 200  # both branches of the speed limit were exercised
+
+
+def test_the_simulation_uses_the_compiled_tick(sim):
+    rng = np.random.default_rng(1)
+    state, reference, action = _random_tick(rng, sim, load_scene())
+    sim._reference = reference.copy()
+    linear, angular = p.calculateJacobian(
+        sim.robot,
+        TOOL_LINK,
+        [0.0] * 3,
+        sim.q.tolist(),
+        [0.0] * 7,
+        [0.0] * 7,
+        physicsClientId=sim.client,
+    )
+    want, want_reference = joint_velocities_numpy(
+        np.array((*linear, *angular)), sim.q, state, reference, sim._rotation, action, sim._gains
+    )
+    np.testing.assert_allclose(sim.joint_velocities(action), want, rtol=1e-10, atol=1e-12)
+    np.testing.assert_array_equal(sim._reference, want_reference)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_non_finite_command_leaves_the_reference_alone(sim, bad):
+    reference = sim._reference.copy()
+    with pytest.raises(ValueError, match="4 finite numbers"):
+        sim.joint_velocities([0.0, bad, 0.0, 0.0])
+    np.testing.assert_array_equal(sim._reference, reference)
