@@ -6,16 +6,24 @@ across the joint ranges (near limits too), lags beyond ``max_lag`` and commands 
 enough to hit the joint speed limits. The pouring cost's hand-written gradient
 (``casa_core.skills.PouringCost``) is held to torch's autograd of
 ``PouringIntent.state_cost``, at random states and where its roundings act (at the
-target, the cup upright, the cup at the pouring tilt).
+target, the cup upright, the cup at the pouring tilt). A trial CSV checked on whole
+arrays (``casa_core.io.validation``) gives the table and the problems the cell-by-cell
+checks give, on a valid trial and on one broken cell of each kind.
 """
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
+import pandas as pd
 import pybullet as p
 import pytest
 import torch
 
+from casa_core.io import validation
+from casa_core.io._cells import read_csv_cells
+from casa_core.io.atomic import frame_to_csv_text
 from casa_core.planning import optimize
 from casa_core.robot import kinematics as kin
 from casa_core.robot.control_kernel import joint_velocities, joint_velocities_numpy
@@ -158,3 +166,92 @@ def test_pouring_plans_with_the_hand_gradient_equal_plans_with_autograd():
         assert abs(fast.iterations - plain.iterations) <= 1
         np.testing.assert_allclose(fast.states, plain.states, rtol=0, atol=1e-4)
         np.testing.assert_allclose(fast.costs, plain.costs, rtol=1e-8)
+
+
+def _trial_text():
+    """A valid casa-trial/1 CSV of 301 ticks with two intents (written as a trial writes)."""
+    rng = np.random.default_rng(4)
+    n = 301
+    belief = rng.uniform(0.0, 1.0, n)
+    frame = pd.DataFrame(
+        {
+            "t": np.round(np.arange(n) * 0.05, 6),
+            "x": rng.uniform(0.3, 0.6, n),
+            "y": rng.uniform(-0.3, 0.3, n),
+            "z": rng.uniform(0.1, 0.4, n),
+            "rot": rng.uniform(-3.0, 3.0, n),
+            "keys": rng.choice(["", "x+", "x+ y-", "rot+"], n),
+            "alpha": rng.uniform(0.0, 1.0, n),
+            **{f"q{i}": rng.normal(size=n) for i in range(1, 8)},
+            "beta:a": rng.uniform(0.0, 5.0, n),
+            "beta:b": rng.uniform(0.0, 5.0, n),
+            "belief:a": belief,
+            "belief:b": 1.0 - belief,
+        }
+    )
+    return frame_to_csv_text(frame)
+
+
+def _replace_cell(text, line, column, value):
+    rows = text.split("\n")
+    header = rows[0].split(",")
+    cells = rows[line - 1].split(",")
+    cells[header.index(column)] = value
+    rows[line - 1] = ",".join(cells)
+    return "\n".join(rows)
+
+
+def _edits():
+    """Valid and broken variants of one trial: every rule the whole-table check decides."""
+    text = _trial_text()
+    yield "valid", text, None
+    yield "valid, intents named", text, {"intents": ["a", "b"]}
+    yield "an intent not in the metadata", text, {"intents": ["a"]}
+    yield "valid, one row", "\n".join(text.split("\n")[:2]) + "\n", None
+    for column, value in [
+        ("x", "nan"),
+        ("x", "2.5"),
+        ("alpha", "1.0000001"),
+        ("beta:a", "-1e-9"),
+        ("rot", "150"),
+        ("q3", "inf"),
+        ("q3", "abc"),
+        ("t", "0.1"),  # not increasing
+        ("t", "0.101"),  # an irregular step (a warning)
+        ("keys", "x+ x+"),
+        ("keys", "up"),
+        ("keys", "x+\u00a0y-"),
+        ("belief:a", "2"),
+    ]:
+        yield f"{column} = {value!r}", _replace_cell(text, 5, column, value), None  # t = 0.15
+    yield "valid, as float() reads it", _replace_cell(text, 5, "rot", " 1_0"), None
+    # Beliefs summing to 1 - 2e-6 (outside the tolerance) and to 1 - 6e-7 (inside).
+    for shortfall in (2e-6, 6e-7):
+        lines = text.split("\n")
+        belief = float(lines[5].split(",")[-1])
+        yield (
+            f"beliefs short by {shortfall}",
+            _replace_cell(text, 6, "belief:b", repr(belief - shortfall)),
+            None,
+        )
+    yield "first tick late", text.replace("\n0.0,", "\n0.2,", 1), None
+    stretched = pd.read_csv(io.StringIO(text))
+    stretched["t"] = np.round(stretched["t"] * 2, 6)
+    yield "a 10 Hz trial", frame_to_csv_text(stretched), None
+
+
+@pytest.mark.parametrize(("what", "text", "meta"), list(_edits()), ids=lambda x: str(x)[:30])
+def test_the_whole_table_check_reads_what_the_cell_checks_read(what, text, meta, monkeypatch):
+    # The same table and the same problems, word for word, with and without the fast path.
+    frame, problems = validation.parse_trial_csv(text, "t.csv", meta=meta)
+    cells, _ = read_csv_cells(text, "t.csv")
+    taken = validation._valid_frame(cells, meta) is not None
+    assert taken == what.startswith("valid")  # the fast path decides only valid tables
+    monkeypatch.setattr(validation, "_valid_frame", lambda cells, meta: None)
+    want_frame, want_problems = validation.parse_trial_csv(text, "t.csv", meta=meta)
+    assert [str(p) for p in problems] == [str(p) for p in want_problems]
+    assert [p.severity for p in problems] == [p.severity for p in want_problems]
+    pd.testing.assert_frame_equal(frame, want_frame, check_exact=True)
+    assert list(frame.dtypes) == list(want_frame.dtypes)
+    if taken:
+        assert problems == []
