@@ -26,7 +26,7 @@ from casa_core.io._cells import read_csv_cells
 from casa_core.io.atomic import frame_to_csv_text
 from casa_core.planning import optimize
 from casa_core.robot import kinematics as kin
-from casa_core.robot.control_kernel import joint_velocities, joint_velocities_numpy
+from casa_core.robot.control_kernel import joint_velocities, joint_velocities_numpy, read_pose
 from casa_core.robot.sim import TOOL_LINK, ArmSimulation
 from casa_core.scene import load_scene
 from casa_core.skills import PouringIntent
@@ -109,6 +109,24 @@ def test_the_simulation_uses_the_compiled_tick(sim):
     )
     np.testing.assert_allclose(sim.joint_velocities(action), want, rtol=1e-10, atol=1e-12)
     np.testing.assert_array_equal(sim._reference, want_reference)
+
+
+def test_the_compiled_reading_equals_the_numpy_one(sim):
+    # rot_of of pybullet's matrix, unwrapped from the last reading (as the numpy code did).
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        state, _, action = _random_tick(rng, sim, load_scene())
+        previous = rng.uniform(-20.0, 20.0)
+        link = p.getLinkState(
+            sim.robot, TOOL_LINK, computeForwardKinematics=True, physicsClientId=sim.client
+        )
+        matrix = p.getMatrixFromQuaternion(link[5])
+        got, rotation = read_pose(link[4], matrix, previous)
+        change = kin.rot_of(np.array(matrix).reshape(3, 3)) - np.float64(previous)
+        want_rot = previous + float((change + np.pi) % (2 * np.pi) - np.pi)
+        np.testing.assert_array_equal(rotation, np.array(matrix).reshape(3, 3))
+        np.testing.assert_array_equal(got[:3], link[4])
+        assert got[3] == pytest.approx(want_rot, abs=1e-12)
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])

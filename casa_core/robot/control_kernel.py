@@ -226,3 +226,32 @@ def joint_velocities(linear, angular, q, state, reference, rotation, action, gai
         for j in range(_N):
             qdot[j] /= excess
     return qdot
+
+
+@njit(cache=True)
+def read_pose(position, matrix, previous_rot):
+    """The state ``[x, y, z, rot]`` and rotation ``(3, 3)`` of pybullet's tool pose.
+
+    ``position`` and ``matrix`` (row-major, 9 numbers) as pybullet gives them; ``rot``
+    is :func:`~casa_core.robot.kinematics.rot_of` of the rotation, unwrapped: the
+    previous reading plus the change wrapped into ``[-pi, pi)``.
+
+    Examples
+    --------
+    >>> state, rotation = read_pose((0.4, 0.0, 0.3), tuple(kin.ee_rotation(0.5).ravel()), 6.0)
+    >>> [round(float(v), 6) for v in state], bool((rotation == kin.ee_rotation(0.5)).all())
+    ([0.4, 0.0, 0.3, 6.783185], True)
+    """
+    rotation = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            rotation[i, j] = matrix[3 * i + j]
+    # rot_of: the angle of (R0^T rotation)[:, 0] in the plane of its first two entries.
+    cosine = _R0[0, 0] * rotation[0, 0] + _R0[1, 0] * rotation[1, 0] + _R0[2, 0] * rotation[2, 0]
+    sine = _R0[0, 1] * rotation[0, 0] + _R0[1, 1] * rotation[1, 0] + _R0[2, 1] * rotation[2, 0]
+    change = math.atan2(sine, cosine) - previous_rot
+    state = np.empty(4)
+    for i in range(3):
+        state[i] = position[i]
+    state[3] = previous_rot + ((change + math.pi) % (2 * math.pi) - math.pi)
+    return state, rotation

@@ -33,6 +33,7 @@ import pybullet as p
 from casa_core.defaults import TICK
 from casa_core.robot import kinematics as kin
 from casa_core.robot.control_kernel import joint_velocities as _joint_velocities
+from casa_core.robot.control_kernel import read_pose as _read_pose
 from casa_core.robot.scene import SceneBodies, build_scene
 from casa_core.scene import Scene
 
@@ -73,10 +74,6 @@ class ControllerSettings:
     null_gain: float = 0.5
     max_lag: float = 0.01
     motor_force: float = 200.0
-
-
-def _wrap(angle: float) -> float:
-    return float((angle + np.pi) % (2 * np.pi) - np.pi)
 
 
 class ArmSimulation:
@@ -178,11 +175,13 @@ class ArmSimulation:
     def _read(self) -> None:
         joints = p.getJointStates(self.robot, ARM_JOINTS, physicsClientId=self.client)
         self._q = np.array([joint[0] for joint in joints])
-        position, rotation = self.ee_pose()
-        # Unwrap rot: add the wrapped change since the last reading.
-        rot = self._state[3] + _wrap(kin.rot_of(rotation) - self._state[3])
-        self._state = np.array([*position, rot])
-        self._rotation = rotation
+        link = p.getLinkState(
+            self.robot, TOOL_LINK, computeForwardKinematics=True, physicsClientId=self.client
+        )
+        # One compiled call: the rotation matrix and rot, unwrapped from the last reading.
+        self._state, self._rotation = _read_pose(
+            link[4], p.getMatrixFromQuaternion(link[5]), float(self._state[3])
+        )
 
     def reset(self, state, q=None) -> np.ndarray:
         """Put the arm at ``state`` = ``[x, y, z, rot]`` (by inverse kinematics) or at ``q``.
