@@ -21,6 +21,7 @@ import pybullet as p
 import pytest
 import torch
 
+from casa_core import arbitration
 from casa_core.io import validation
 from casa_core.io._cells import read_csv_cells
 from casa_core.io.atomic import frame_to_csv_text
@@ -279,3 +280,16 @@ def test_the_whole_table_check_reads_what_the_cell_checks_read(what, text, meta,
 def test_row_lengths_are_numpys_norms_to_the_bit():
     rows = np.random.default_rng(5).normal(size=(200, 4)) * np.array([1.0, 1e-3, 10.0, 0.1])
     np.testing.assert_array_equal(row_lengths(rows), np.linalg.norm(rows, axis=1))
+
+
+def test_the_scalar_blend_is_the_checked_one_to_the_bit():
+    rng = np.random.default_rng(6)
+    cases = [(float(a), rng.normal(size=4), rng.normal(size=4)) for a in rng.uniform(size=50)]
+    cases += [(0.0, np.zeros(4), np.full(4, np.inf)), (np.float64(0.3), np.ones(4), -np.ones(4))]
+    for alpha, user, robot in cases:
+        want = arbitration._checked_blend(alpha, user, robot)
+        np.testing.assert_array_equal(arbitration.blend(alpha, user, robot), want)
+    with pytest.raises(ValueError, match="user_action contains NaN"):
+        arbitration.blend(0.5, np.array([np.nan, 0.0]), np.zeros(2))
+    with pytest.raises(ValueError, match="alpha must lie"):
+        arbitration.blend(1.5, np.zeros(2), np.zeros(2))
