@@ -193,6 +193,7 @@ class SimulatedParticipant:
         self._seen = deque()  # (t, state) not yet perceived
         self._perceived = None
         self._noise = np.zeros(3)
+        self._ar1 = None
         self._progress = 0
         self._held: frozenset[str] = frozenset()
         self._lapse_until = -1.0
@@ -221,9 +222,12 @@ class SimulatedParticipant:
 
     def _perceive(self) -> np.ndarray:
         # AR(1) position noise with a 0.5 s time constant, doubled along x (depth).
-        decay = np.exp(-self.tick / 0.5)
-        scale = self.params.perception_noise * np.array([2.0, 1.0, 1.0])
-        innovation = self.rng.standard_normal(3) * scale * np.sqrt(1 - decay**2)
+        if self._ar1 is None:  # (decay, scale, innovation scale), once per participant
+            decay = np.exp(-self.tick / 0.5)
+            scale = self.params.perception_noise * np.array([2.0, 1.0, 1.0])
+            self._ar1 = (decay, scale, np.sqrt(1 - decay**2))
+        decay, scale, root = self._ar1
+        innovation = self.rng.standard_normal(3) * scale * root
         self._noise = decay * self._noise + innovation
         perceived = self._perceived.copy()
         perceived[:3] += self._noise
@@ -241,9 +245,9 @@ class SimulatedParticipant:
         here = perceived.copy()
         here[3] *= ROT_TO_METRES
         window = self._scaled[self._progress : self._progress + 40]
-        self._progress += int(np.argmin(row_lengths(window - here)))
+        self._progress += int(row_lengths(window - here).argmin())
         path = np.cumsum(self._steps[self._progress :])
-        return self._progress + int(np.searchsorted(path, LOOKAHEAD))
+        return self._progress + int(path.searchsorted(LOOKAHEAD))
 
     def _arrived(self, perceived: np.ndarray, ahead: int) -> bool:
         """Whether the steering point is the path's end and the arm is seen there."""
@@ -335,12 +339,12 @@ class PredictiveParticipant(SimulatedParticipant):
         last = len(self._scaled) - 1
         # The predicted position's nearest path point, searched ahead of the progress.
         window = self._scaled[start : start + int(horizon / self.tick) + 40]
-        nearest = start + int(np.argmin(row_lengths(window - predicted)))
+        nearest = start + int(row_lengths(window - predicted).argmin())
         tangent = self._tangents[nearest]
         offset = predicted - self._scaled[nearest]
         along = float(offset @ tangent)
         correction = -(offset - along * tangent)  # back to the path, across it
-        wanted = min(int(np.searchsorted(self._times, self._times[start] + horizon)), last)
+        wanted = min(int(self._times.searchsorted(self._times[start] + horizon)), last)
         behind = self._arc[wanted] - (self._arc[nearest] + along)
         threshold = self.params.deadband
         if wanted == last and abs(tangent[3]) > 0.5:
@@ -350,7 +354,7 @@ class PredictiveParticipant(SimulatedParticipant):
         self._pushing = behind > threshold
         if self._pushing:
             # Along the path; the axis it runs along most gets the whole shortfall.
-            correction += behind * tangent / np.max(np.abs(tangent))
+            correction += behind * tangent / abs(tangent).max()
         elif wanted == last:
             # Past the end now (not just predicted to arrive): back to the end.
             beyond = float((here - self._scaled[last]) @ self._tangents[last])
