@@ -63,21 +63,21 @@ def _random_tick(rng, sim, scene):
     return state, reference, action
 
 
+def _jacobian(sim):
+    """pybullet's Jacobian rows (linear, angular) of the tool at the arm's joint angles."""
+    zeros = [0.0] * 7
+    return p.calculateJacobian(
+        sim.robot, TOOL_LINK, [0.0] * 3, sim.q.tolist(), zeros, zeros, physicsClientId=sim.client
+    )
+
+
 def test_the_compiled_tick_equals_the_numpy_formula(sim):
     # The same formula; the 6 x 6 solve differs (Cholesky vs LU) by float rounding.
     rng = np.random.default_rng(0)
     scaled = 0
     for _ in range(200):
         state, reference, action = _random_tick(rng, sim, load_scene())
-        linear, angular = p.calculateJacobian(
-            sim.robot,
-            TOOL_LINK,
-            [0.0] * 3,
-            sim.q.tolist(),
-            [0.0] * 7,
-            [0.0] * 7,
-            physicsClientId=sim.client,
-        )
+        linear, angular = _jacobian(sim)
         jac = np.array((*linear, *angular))
         want, want_reference = joint_velocities_numpy(
             jac, sim.q, state, reference, sim._rotation, action, sim._gains
@@ -96,15 +96,7 @@ def test_the_simulation_uses_the_compiled_tick(sim):
     rng = np.random.default_rng(1)
     state, reference, action = _random_tick(rng, sim, load_scene())
     sim._reference = reference.copy()
-    linear, angular = p.calculateJacobian(
-        sim.robot,
-        TOOL_LINK,
-        [0.0] * 3,
-        sim.q.tolist(),
-        [0.0] * 7,
-        [0.0] * 7,
-        physicsClientId=sim.client,
-    )
+    linear, angular = _jacobian(sim)
     want, want_reference = joint_velocities_numpy(
         np.array((*linear, *angular)), sim.q, state, reference, sim._rotation, action, sim._gains
     )
