@@ -206,7 +206,9 @@ class ArmSimulation:
         correction toward the reference pose, with ``vrot`` added to the last joint,
         then advances the reference by ``action * dt``. A null-space term centres the
         bounded joints; the result is scaled down uniformly when a joint would exceed
-        its speed limit.
+        its speed limit. The formula is
+        :func:`~casa_core.robot.control_kernel.joint_velocities_numpy`, computed in one
+        compiled call.
         """
         action = np.asarray(action, dtype=float)
         if action.shape == (4,):
