@@ -11,6 +11,8 @@ assistant on its per-step path, on input it has checked once.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from casa_core._checks import as_finite_or_inf, require_positive, scalar_or_array
@@ -143,6 +145,20 @@ def blend(alpha, user_action, robot_action):
     >>> blend(0.25, np.array([1.0, 0.0]), np.array([0.0, 1.0]))
     array([0.25, 0.75])
     """
+    if (  # every control tick: a scalar alpha and float actions, checked in two calls
+        isinstance(alpha, float)
+        and 0.0 <= alpha <= 1.0
+        and isinstance(user_action, np.ndarray)
+        and isinstance(robot_action, np.ndarray)
+        and user_action.dtype == robot_action.dtype == np.float64
+        and math.isfinite(user_action.sum() + robot_action.sum())
+    ):
+        return alpha * user_action + (1.0 - alpha) * robot_action
+    return _checked_blend(alpha, user_action, robot_action)
+
+
+def _checked_blend(alpha, user_action, robot_action):
+    """:func:`blend` for any input: each argument checked and converted."""
     alpha = as_finite_or_inf("alpha", alpha)
     if ((alpha < 0) | (alpha > 1)).any():
         raise ValueError("alpha must lie in [0, 1]")

@@ -9,11 +9,13 @@ only; :mod:`casa_core.io.trial_log` reads and writes the files. The contract its
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 
 from casa_core.io._cells import check_columns, in_range, numeric, read_csv_cells, where_lines
 from casa_core.io._ticks import check_belief_sum, check_ticks
 from casa_core.io.contract import (
+    BELIEF_SUM_TOLERANCE,
     COLUMN_RANGES,
     FRAME_OPTIONAL,
     FRAME_REQUIRED,
@@ -26,6 +28,8 @@ from casa_core.io.contract import (
     SURVEY_COLUMNS,
     SURVEY_ENUMS,
     SURVEY_OPTIONAL,
+    TICK,
+    TICK_TOLERANCE,
     TIME_RANGE,
 )
 from casa_core.io.metadata import check_meta, participant_id_problem
@@ -46,6 +50,9 @@ _FRAME_ALLOWED = "allowed: " + ", ".join(
     [*FRAME_REQUIRED, *FRAME_OPTIONAL, f"{JOINTS[0]}..{JOINTS[-1]}"]
     + [f"{prefix}:NAME" for prefix in INTENT_PREFIXES]
 )
+
+
+_KEY_SET = frozenset(KEYS)
 
 
 def _known_column(name: str) -> bool:
@@ -76,6 +83,56 @@ def _check_keys(keys: pd.Series, file: str, problems: list) -> None:
                 file, f"column 'keys', {where_lines(repeated)}", "keys", "a key is listed twice"
             )
         )
+
+
+def _valid_frame(cells: pd.DataFrame, meta) -> pd.DataFrame | None:
+    """The typed table of a trial that breaks no rule, checked on whole arrays; else None.
+
+    Every rule of :func:`parse_trial_csv` below the columns' own, decided on the table at
+    once (a written trial is checked and read again once per use, and cell-by-cell
+    checks cost most of that). When any rule may be broken, and at the edge of a
+    tolerance, it returns None and the checks that name each problem run instead.
+    """
+    columns = [c for c in cells.columns if c != "keys"]
+    if "keys" not in cells.columns or not all(_known_column(c) for c in columns):
+        return None
+    block = np.empty((len(cells), len(columns)))
+    try:
+        for j, column in enumerate(columns):  # as numeric() parses a cell
+            block[:, j] = np.asarray(cells[column], dtype=float)
+    except ValueError:
+        return None
+    if not np.isfinite(block).all():
+        return None
+    intents = meta.get("intents") if isinstance(meta, dict) else None
+    for j, column in enumerate(columns):
+        bounds = COLUMN_RANGES.get(column.partition(":")[0])
+        if bounds is not None and ((block[:, j] < bounds[0]) | (block[:, j] > bounds[1])).any():
+            return None
+        if ":" in column and isinstance(intents, list) and column.partition(":")[2] not in intents:
+            return None
+    t = block[:, columns.index("t")]
+    steps = np.diff(t)
+    slack = TICK * TICK_TOLERANCE + 1e-9  # as check_ticks: each step within it, so the median
+    if (
+        (steps <= 0).any()
+        or t.min() < TIME_RANGE[0]
+        or t.max() > TIME_RANGE[1]
+        or t[0] > TICK + 1e-9
+        or (np.abs(steps - TICK) > slack).any()
+    ):
+        return None
+    beliefs = [j for j, c in enumerate(columns) if c.partition(":")[0] == "belief"]
+    # Short of the tolerance by more than a sum's rounding in another order.
+    if beliefs and (np.abs(block[:, beliefs].sum(axis=1) - 1.0) > BELIEF_SUM_TOLERANCE / 2).any():
+        return None
+    for held in set(cells["keys"]):  # a trial holds a few distinct key sets
+        tokens = held.split()
+        if not held.isascii() or len(set(tokens)) != len(tokens) or not set(tokens) <= _KEY_SET:
+            return None
+    frame = pd.DataFrame(block, columns=columns)
+    frame["keys"] = cells["keys"].reset_index(drop=True)
+    return frame[list(cells.columns)]
 
 
 def parse_trial_csv(
@@ -116,6 +173,10 @@ def parse_trial_csv(
     )
     if len(cells) == 0:
         problems.append(Problem(file, "", "non-empty", "no rows; expected one row per tick"))
+    if not problems:
+        valid = _valid_frame(cells, meta)
+        if valid is not None:
+            return valid, problems
     intents = meta.get("intents") if isinstance(meta, dict) else None
     frame = pd.DataFrame(index=cells.index)
     for column in cells.columns:

@@ -32,6 +32,8 @@ import pybullet as p
 
 from casa_core.defaults import TICK
 from casa_core.robot import kinematics as kin
+from casa_core.robot.control_kernel import joint_velocities as _joint_velocities
+from casa_core.robot.control_kernel import read_pose as _read_pose
 from casa_core.robot.scene import SceneBodies, build_scene
 from casa_core.scene import Scene
 
@@ -72,35 +74,6 @@ class ControllerSettings:
     null_gain: float = 0.5
     max_lag: float = 0.01
     motor_force: float = 200.0
-
-
-_BOUNDED = np.isfinite(kin.JOINT_LOWER)
-_BOUNDED_INDEX = np.flatnonzero(_BOUNDED)
-_LOWER_B = kin.JOINT_LOWER[_BOUNDED_INDEX]
-_UPPER_B = kin.JOINT_UPPER[_BOUNDED_INDEX]
-_SPAN_B = _UPPER_B - _LOWER_B
-_EYE6 = np.eye(6)
-_MIDDLE_OR_ZERO = np.zeros(kin.N_JOINTS)
-_MIDDLE_OR_ZERO[_BOUNDED_INDEX] = (_LOWER_B + _UPPER_B) / 2
-
-
-def _limit_gradient(q: np.ndarray) -> np.ndarray:
-    """``|dH/dq|`` of the joint-limit index ``H = sum (u - l)^2 / (4 (u - q)(q - l))``.
-
-    Zero for unbounded joints; grows without bound as a joint reaches a limit.
-    """
-    bounded = q[_BOUNDED_INDEX]
-    to_lower = np.maximum(bounded - _LOWER_B, 1e-4)
-    to_upper = np.maximum(_UPPER_B - bounded, 1e-4)
-    gradient = np.zeros_like(q)
-    gradient[_BOUNDED_INDEX] = (
-        _SPAN_B**2 * np.abs(2 * bounded - _UPPER_B - _LOWER_B) / (4 * to_lower**2 * to_upper**2)
-    )
-    return gradient
-
-
-def _wrap(angle: float) -> float:
-    return float((angle + np.pi) % (2 * np.pi) - np.pi)
 
 
 class ArmSimulation:
@@ -157,7 +130,11 @@ class ArmSimulation:
         except Exception:
             p.disconnect(self.client)
             raise
-        self._joint_speed = kin.JOINT_MAX_SPEED
+        s = self.settings
+        self._gains = np.array(
+            [s.dt, s.max_lag, s.position_gain, s.orientation_gain, s.damping, s.null_gain]
+        )
+        self._zeros = [0.0] * kin.N_JOINTS
         self._q = np.zeros(kin.N_JOINTS)
         self._state = np.zeros(4)
         self._reference = np.zeros(4)
@@ -198,11 +175,13 @@ class ArmSimulation:
     def _read(self) -> None:
         joints = p.getJointStates(self.robot, ARM_JOINTS, physicsClientId=self.client)
         self._q = np.array([joint[0] for joint in joints])
-        position, rotation = self.ee_pose()
-        # Unwrap rot: add the wrapped change since the last reading.
-        rot = self._state[3] + _wrap(kin.rot_of(rotation) - self._state[3])
-        self._state = np.array([*position, rot])
-        self._rotation = rotation
+        link = p.getLinkState(
+            self.robot, TOOL_LINK, computeForwardKinematics=True, physicsClientId=self.client
+        )
+        # One compiled call: the rotation matrix and rot, unwrapped from the last reading.
+        self._state, self._rotation = _read_pose(
+            link[4], p.getMatrixFromQuaternion(link[5]), float(self._state[3])
+        )
 
     def reset(self, state, q=None) -> np.ndarray:
         """Put the arm at ``state`` = ``[x, y, z, rot]`` (by inverse kinematics) or at ``q``.
@@ -227,48 +206,35 @@ class ArmSimulation:
         correction toward the reference pose, with ``vrot`` added to the last joint,
         then advances the reference by ``action * dt``. A null-space term centres the
         bounded joints; the result is scaled down uniformly when a joint would exceed
-        its speed limit.
+        its speed limit. The formula is
+        :func:`~casa_core.robot.control_kernel.joint_velocities_numpy`, computed in one
+        compiled call.
         """
-        s = self.settings
         action = np.asarray(action, dtype=float)
-        if action.shape != (4,) or not np.all(np.isfinite(action)):
-            raise ValueError(f"action must be 4 finite numbers [vx, vy, vz, vrot], got {action}")
-        # How far the arm lags behind the reference at the start of this tick.
-        lag = np.minimum(np.maximum(self._reference - self._state, -s.max_lag), s.max_lag)
-        self._reference = self._state + lag + action * s.dt
-        target = kin.ee_rotation(self._state[3] + lag[3])
-        twist = np.concatenate(
-            [
-                action[:3] + s.position_gain * lag[:3],
-                s.orientation_gain * kin.orientation_error(target, self._rotation),
-            ]
-        )
-        zeros = [0.0] * kin.N_JOINTS
-        linear, angular = p.calculateJacobian(
-            self.robot,
-            TOOL_LINK,
-            [0.0, 0.0, 0.0],
-            self._q.tolist(),
-            zeros,
-            zeros,
-            physicsClientId=self.client,
-        )
-        jac = np.array((*linear, *angular))
-        # Weighted damped least squares (Chan and Dubey 1995): a bounded joint nearing a
-        # limit gets a heavy weight, so the redundant arm turns its other joints instead.
-        inv_weight = 1.0 / (1.0 + _limit_gradient(self._q))
-        weighted = jac * inv_weight
-        gram = weighted @ jac.T + s.damping**2 * _EYE6
-        # In the null space of the task, centre the bounded joints in their range:
-        # qdot = c + W^-1 J^T (J W^-1 J^T + damping^2 I)^-1 (twist - J c).
-        centring = (_MIDDLE_OR_ZERO - self._q) * _BOUNDED * s.null_gain
-        qdot = centring + weighted.T @ np.linalg.solve(gram, twist - jac @ centring)
-        # The rotate keys turn the last joint itself, as in the original implementation:
-        # its axis is the tool's z axis reversed, and turning it moves neither the cup nor
-        # that axis.
-        qdot[6] -= action[3]
-        excess = np.max(np.abs(qdot) / self._joint_speed)
-        return qdot / excess if excess > 1.0 else qdot
+        if action.shape == (4,):
+            linear, angular = p.calculateJacobian(
+                self.robot,
+                TOOL_LINK,
+                [0.0, 0.0, 0.0],
+                self._q.tolist(),
+                self._zeros,
+                self._zeros,
+                physicsClientId=self.client,
+            )
+            # One compiled call (casa_core.robot.control_kernel); advances the reference.
+            qdot = _joint_velocities(
+                linear,
+                angular,
+                self._q,
+                self._state,
+                self._reference,
+                self._rotation,
+                action,
+                self._gains,
+            )
+            if len(qdot):
+                return qdot
+        raise ValueError(f"action must be 4 finite numbers [vx, vy, vz, vrot], got {action}")
 
     def step(self, action) -> np.ndarray:
         """Drive the arm with Cartesian velocity ``action`` for one tick; return the new state.

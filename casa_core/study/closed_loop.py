@@ -237,12 +237,14 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
             inference = assistant.update(state)
             beta, belief, alpha = inference.beta, inference.belief, inference.alpha
         held = check_keys(source.keys(t, state))
-        row = {"t": round(t, 6), "x": state[0], "y": state[1], "z": state[2], "rot": state[3]}
-        row["keys"] = format_keys(held)
+        x, y, z, rot = state.tolist()
+        row = {"t": round(t, 6), "x": x, "y": y, "z": z, "rot": rot, "keys": format_keys(held)}
         row["alpha"] = alpha
-        row.update(zip(q_columns, sim.q, strict=True))
-        row.update({column: beta[name] for column, name in beta_columns})
-        row.update({column: belief[name] for column, name in belief_columns})
+        row.update(zip(q_columns, sim.q.tolist(), strict=True))
+        for column, name in beta_columns:
+            row[column] = beta[name]
+        for column, name in belief_columns:
+            row[column] = belief[name]
         rows.append(row)
         if on_tick is not None:
             on_tick(t, state, held, alpha)

@@ -107,15 +107,17 @@ class WaypointKeys:
         self._index = 0
 
     def keys(self, t: float, state) -> frozenset[str]:
-        tolerance = np.array([self.tolerance] * 3 + [self.rot_tolerance])
+        tolerance = [self.tolerance] * 3 + [self.rot_tolerance]
         while self._index < len(self.waypoints):
-            error = self.waypoints[self._index] - np.asarray(state, dtype=float)
-            if np.any(np.abs(error) > tolerance):
-                return frozenset(
-                    plus if e > 0 else minus
-                    for e, tol, (plus, minus) in zip(error, tolerance, AXIS_KEYS, strict=True)
-                    if abs(e) > tol
-                )
+            # On Python floats: the same differences and comparisons, without numpy scalars.
+            error = (self.waypoints[self._index] - np.asarray(state, dtype=float)).tolist()
+            held = frozenset(
+                plus if e > 0 else minus
+                for e, tol, (plus, minus) in zip(error, tolerance, AXIS_KEYS, strict=True)
+                if abs(e) > tol
+            )
+            if held:
+                return held
             self._index += 1
         self.done = True
         return frozenset()

@@ -102,6 +102,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from casa_core.robot.keys import AXIS_KEYS
+from casa_core.study.path_geometry import row_lengths, unit_tangents
 
 # Rotation error is compared with position error at this many metres per radian.
 ROT_TO_METRES = 0.1
@@ -113,6 +114,7 @@ LEAD_TIME = 0.5
 VELOCITY_FILTER = 1.0
 #: Shortest interval from a change of the predictive operator's keys to its next press, s.
 REFRACTORY = 0.25
+_SCALE = np.array([1.0, 1.0, 1.0, ROT_TO_METRES])  # [x, y, z, rot] with rot in metres
 
 
 @dataclass(frozen=True)
@@ -186,10 +188,12 @@ class SimulatedParticipant:
         self.rng = rng
         self.tick = tick
         # The path with rotation in metres (ROT_TO_METRES), so that distances mix the two.
-        self._scaled = self.reference * np.array([1.0, 1.0, 1.0, ROT_TO_METRES])
+        self._scaled = self.reference * _SCALE
+        self._steps = row_lengths(np.diff(self._scaled, axis=0))  # path length of each step
         self._seen = deque()  # (t, state) not yet perceived
         self._perceived = None
         self._noise = np.zeros(3)
+        self._ar1 = None
         self._progress = 0
         self._held: frozenset[str] = frozenset()
         self._lapse_until = -1.0
@@ -218,9 +222,12 @@ class SimulatedParticipant:
 
     def _perceive(self) -> np.ndarray:
         # AR(1) position noise with a 0.5 s time constant, doubled along x (depth).
-        decay = np.exp(-self.tick / 0.5)
-        scale = self.params.perception_noise * np.array([2.0, 1.0, 1.0])
-        innovation = self.rng.standard_normal(3) * scale * np.sqrt(1 - decay**2)
+        if self._ar1 is None:  # (decay, scale, innovation scale), once per participant
+            decay = np.exp(-self.tick / 0.5)
+            scale = self.params.perception_noise * np.array([2.0, 1.0, 1.0])
+            self._ar1 = (decay, scale, np.sqrt(1 - decay**2))
+        decay, scale, root = self._ar1
+        innovation = self.rng.standard_normal(3) * scale * root
         self._noise = decay * self._noise + innovation
         perceived = self._perceived.copy()
         perceived[:3] += self._noise
@@ -238,9 +245,9 @@ class SimulatedParticipant:
         here = perceived.copy()
         here[3] *= ROT_TO_METRES
         window = self._scaled[self._progress : self._progress + 40]
-        self._progress += int(np.argmin(np.linalg.norm(window - here, axis=1)))
-        path = np.linalg.norm(np.diff(self._scaled[self._progress :], axis=0), axis=1)
-        return self._progress + int(np.searchsorted(np.cumsum(path), LOOKAHEAD))
+        self._progress += int(row_lengths(window - here).argmin())
+        path = np.cumsum(self._steps[self._progress :])
+        return self._progress + int(path.searchsorted(LOOKAHEAD))
 
     def _arrived(self, perceived: np.ndarray, ahead: int) -> bool:
         """Whether the steering point is the path's end and the arm is seen there."""
@@ -252,7 +259,7 @@ class SimulatedParticipant:
         )
 
     def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
-        magnitude = np.abs(error) * np.array([1.0, 1.0, 1.0, ROT_TO_METRES])
+        magnitude = np.abs(error) * _SCALE
         # Hysteresis: a held key stays down until the error falls to a third of the deadband.
         held_axes = {
             axis
@@ -295,9 +302,8 @@ class PredictiveParticipant(SimulatedParticipant):
     def __init__(self, params: ParticipantParams, reference, *, rng, tick: float = 0.05):
         super().__init__(params, reference, rng=rng, tick=tick)
         self._times = np.asarray(reference, dtype=float)[:, 0]
-        steps = np.linalg.norm(np.diff(self._scaled, axis=0), axis=1)
-        self._arc = np.concatenate([[0.0], np.cumsum(steps)])
-        self._tangents = _unit_tangents(self._scaled)
+        self._arc = np.concatenate([[0.0], np.cumsum(self._steps)])
+        self._tangents = unit_tangents(self._scaled)
         self._velocity = np.zeros(4)
         self._last: tuple[float, np.ndarray] | None = None
         self._pushing = False
@@ -327,19 +333,18 @@ class PredictiveParticipant(SimulatedParticipant):
         if self._arrived(perceived, ahead):
             return None
         horizon = self.horizon
-        scale = np.array([1.0, 1.0, 1.0, ROT_TO_METRES])
-        here = perceived * scale
-        predicted = here + self._velocity * scale * horizon
+        here = perceived * _SCALE
+        predicted = here + self._velocity * _SCALE * horizon
         start = self._progress
         last = len(self._scaled) - 1
         # The predicted position's nearest path point, searched ahead of the progress.
         window = self._scaled[start : start + int(horizon / self.tick) + 40]
-        nearest = start + int(np.argmin(np.linalg.norm(window - predicted, axis=1)))
+        nearest = start + int(row_lengths(window - predicted).argmin())
         tangent = self._tangents[nearest]
         offset = predicted - self._scaled[nearest]
         along = float(offset @ tangent)
         correction = -(offset - along * tangent)  # back to the path, across it
-        wanted = min(int(np.searchsorted(self._times, self._times[start] + horizon)), last)
+        wanted = min(int(self._times.searchsorted(self._times[start] + horizon)), last)
         behind = self._arc[wanted] - (self._arc[nearest] + along)
         threshold = self.params.deadband
         if wanted == last and abs(tangent[3]) > 0.5:
@@ -349,13 +354,13 @@ class PredictiveParticipant(SimulatedParticipant):
         self._pushing = behind > threshold
         if self._pushing:
             # Along the path; the axis it runs along most gets the whole shortfall.
-            correction += behind * tangent / np.max(np.abs(tangent))
+            correction += behind * tangent / abs(tangent).max()
         elif wanted == last:
             # Past the end now (not just predicted to arrive): back to the end.
             beyond = float((here - self._scaled[last]) @ self._tangents[last])
             if beyond > self.params.deadband:
                 correction -= beyond * self._tangents[last]
-        return correction / scale
+        return correction / _SCALE
 
     def _estimate_velocity(self, perceived: np.ndarray, t: float) -> None:
         # First-order low-pass of the perceived displacement per second (VELOCITY_FILTER).
@@ -364,23 +369,6 @@ class PredictiveParticipant(SimulatedParticipant):
             raw = (perceived - self._last[1]) / elapsed
             self._velocity += (1 - np.exp(-elapsed / VELOCITY_FILTER)) * (raw - self._velocity)
         self._last = (t, perceived.copy())
-
-
-def _unit_tangents(path: np.ndarray) -> np.ndarray:
-    """Unit direction of travel at each sample; a sample that does not move keeps the last."""
-    steps = np.diff(path, axis=0)
-    tangents = np.zeros_like(path)
-    direction = np.zeros(path.shape[1])
-    for i, step in enumerate(steps):
-        length = np.linalg.norm(step)
-        if length > 1e-12:
-            direction = step / length
-        tangents[i] = direction
-    tangents[-1] = direction
-    # Samples before the first move take the first direction.
-    first = next((i for i, step in enumerate(steps) if np.linalg.norm(step) > 1e-12), 0)
-    tangents[:first] = tangents[first]
-    return tangents
 
 
 #: The operator models, by the name of config key ``simulation.operator``.
