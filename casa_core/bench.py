@@ -2,7 +2,8 @@
 
 How long one assistance step takes and how it grows with the intents
 (:func:`assistance_benchmarks`), and how many simulated seconds a whole CASA trial
-runs per second in a simulation kept open (:func:`trial_realtime_factor`); :func:`run_benchmarks` runs them all.
+runs per second in a simulation kept open (:func:`trial_realtime_factor`);
+:func:`run_benchmarks` runs them all.
 
 One *assistance step* is what the assistant does at an inference step (twice per
 second): :meth:`Assistant.update` with the state reached (prefix costs, optimal
@@ -387,9 +388,9 @@ def run_benchmarks(
     factor_cpu, factor_wall = trial_realtime_factor(scene)
     results["trial_realtime_factor"] = factor_cpu
     results["trial_realtime_factor_wall"] = factor_wall
-    results["trial_realtime_factor_new_sim"] = trial_realtime_factor(
-        scene, reuse_simulation=False
-    )[0]
+    results["trial_realtime_factor_new_sim"] = trial_realtime_factor(scene, reuse_simulation=False)[
+        0
+    ]
     if config is not None:
         results.update(participant_benchmark(scene, config=config, participants=participants))
     results["targets_met"] = {key: target_met(key, results.get(key)) for key in TARGETS}
