@@ -3,7 +3,8 @@
 :func:`participant_benchmark` runs the simulated study's protocol
 (:mod:`casa_core.study.simulate`: the trials before learning and the demonstrations,
 learning each unknown task's intent, the trials after learning) for a few
-participants of the study's config, in a temporary folder, and measures the CPU
+participants of the study's config (:func:`casa_core.study.simulate.simulate_protocol`,
+as the power target's jobs run it) in a temporary folder, and measures the CPU
 time of this process for each participant's protocol (``participant_cpu_s``) and for
 each learning step in it (``irl_s``: reading the 5 demonstrations, deep max-ent IRL,
 saving the intent and planning its optimum for ``learning.csv``; slightly more than
@@ -22,7 +23,6 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.scene import Scene
 
 #: Target of each benchmark key: (comparison, bound). Medians, CPU time of one core.
@@ -83,33 +83,16 @@ def participant_benchmark(scene: Scene, *, config: dict, participants=(0,)) -> d
             with tempfile.TemporaryDirectory() as folder:
                 work = Path(folder)
                 start = time.process_time()
-                simulate.simulate_before_learning(
+                run = simulate.simulate_protocol(
                     index,
                     scene,
                     simulation=simulation,
-                    out_dir=work / "before",
-                    inference=inference,
-                )
-                for task in UNKNOWN_TASKS:
-                    began = time.process_time()
-                    simulate.learn_from_demonstrations(
-                        work / "before",
-                        task,
-                        scene=scene,
-                        seed=int(simulation["seed"]) + index,
-                        library=work / "library",
-                        pid=simulate.participant_id(index),
-                    )
-                    learning.append(time.process_time() - began)
-                simulate.simulate_after_learning(
-                    index,
-                    scene,
-                    simulation=simulation,
-                    learned=sorted((work / "library").rglob(f"*{INTENT_SUFFIX}")),
                     before_dir=work / "before",
-                    out_dir=work / "after",
+                    after_dir=work / "after",
+                    libraries={task: work / "intents" / task for task in UNKNOWN_TASKS},
                     inference=inference,
                 )
+                learning += run.learning_cpu_s
                 totals.append(time.process_time() - start)
     finally:
         torch.set_num_threads(threads)

@@ -30,12 +30,17 @@ from dataclasses import dataclass
 from datetime import timedelta
 from pathlib import Path
 
+from casa_core.vocabulary import UNKNOWN_TASKS
+
 #: Where the jobs' benchmark files go, one folder per target (workflow/rules/*.smk).
 BENCHMARKS = Path("benchmarks")
 #: Where each unit's config is written: INTERIM / target / unit / "config.yaml".
 INTERIM = Path("data/interim")
 #: The targets that report progress and the word for their units.
 UNIT_WORDS = {"power": "replicates", "robustness": "variants"}
+#: The robustness jobs of a simulated participant (workflow/rules/robustness.smk): before
+#: learning, learning of each unknown task, after learning.
+ROBUSTNESS_PARTICIPANT_JOBS = ("before", *UNKNOWN_TASKS, "after")
 #: The robustness jobs of a variant besides its participants': tables, statistics, the
 #: case study, the claims.
 ROBUSTNESS_EXTRA_JOBS = 4
@@ -138,7 +143,7 @@ def target_units(config: Mapping, target: str) -> dict[str, int]:
     >>> from casa_core.config import DEFAULT_CONFIG, load_config
     >>> units = target_units(load_config(DEFAULT_CONFIG), "power")
     >>> len(units), units["default/r1"]
-    (200, 98)
+    (200, 26)
     """
     from casa_core import power, variants
 
@@ -147,7 +152,7 @@ def target_units(config: Mapping, target: str) -> dict[str, int]:
         replicates = range(1, config["power"]["replicates"] + 1)
         return {f"{v}/r{r}": jobs for v in power.power_variants(config) for r in replicates}
     if target == "robustness":
-        per_variant = len(power.PARTICIPANT_JOBS) * config["robustness"]["participants"]
+        per_variant = len(ROBUSTNESS_PARTICIPANT_JOBS) * config["robustness"]["participants"]
         per_variant += ROBUSTNESS_EXTRA_JOBS
         return {name: per_variant for name in variants.variant_names(config)}
     raise ValueError(f"progress: no target {target!r} (targets: {', '.join(UNIT_WORDS)})")
@@ -158,7 +163,7 @@ def unit_configs(target: str, units: Mapping[str, int]) -> dict[str, Path]:
 
     Examples
     --------
-    >>> unit_configs("power", {"default/r1": 14})
+    >>> unit_configs("power", {"default/r1": 5})
     {'default/r1': PosixPath('data/interim/power/default/r1/config.yaml')}
     """
     return {unit: INTERIM / target / unit / "config.yaml" for unit in units}

@@ -285,10 +285,10 @@ def test_progress_counts_units_and_estimates_the_time_left(tmp_path):
 
 def test_the_units_of_each_target_and_their_jobs():
     ci = load_config(CONFIG, CI)
-    # A replicate: 4 jobs per participant (before, 2 learned intents, after) x 3, its
-    # tables and its detections; a robustness variant: 4 x 2 participants, its tables,
-    # statistics, case study and claims.
-    assert progress.target_units(ci, "power") == {"default/r1": 14, "default/r2": 14}
+    # A replicate: 1 job per participant (its whole protocol) x 3, its tables and its
+    # detections; a robustness variant: 4 jobs per participant (before, 2 learned
+    # intents, after) x 2 participants, its tables, statistics, case study and claims.
+    assert progress.target_units(ci, "power") == {"default/r1": 5, "default/r2": 5}
     assert progress.target_units(ci, "robustness") == {"default": 12, "original": 12}
     with pytest.raises(ValueError, match="no target 'all'"):
         progress.target_units(ci, "all")
@@ -297,15 +297,15 @@ def test_the_units_of_each_target_and_their_jobs():
 def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)  # the units' configs are looked for below data/interim
     config = _overlay(tmp_path, {"power": {"sizes": [2], "replicates": 2}})
-    # A replicate of 2 participants: 4 jobs each, its tables, its detections (10 jobs).
-    for job in range(10):
+    # A replicate of 2 participants: 1 job each, its tables, its detections (4 jobs).
+    for job in range(4):
         _benchmark(tmp_path / "b" / "power" / "default" / "r1" / f"{job}.tsv", 5.0, 1000.0 + job)
     log = tmp_path / "progress.log"
     args = ["progress", "power", "--config", str(CONFIG), "--config", config]
     args += ["--benchmarks", str(tmp_path / "b"), "--done", "default/r1", "--append", str(log)]
     assert main(args) == 0
     line = capsys.readouterr().out
-    assert line.startswith("power: 1/2 replicates done (10/20 jobs); 50 s of job time")
+    assert line.startswith("power: 1/2 replicates done (4/8 jobs); 20 s of job time")
     assert line.rstrip().endswith("(just done: default/r1)")
     assert log.read_text().split(" ", 1)[1] == line
 
@@ -315,9 +315,9 @@ def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys, monkeypat
 
 def test_a_dry_run_gives_each_replicate_its_jobs_seed_and_files(tmp_path):
     repo, jobs, counts = dry_run(tmp_path, "power")
-    # ci.yaml: sizes 2, 3 and 2 replicates: 3 participants per replicate.
-    assert counts["power_before"] == counts["power_after"] == 6
-    assert counts["power_learn"] == 12
+    # ci.yaml: sizes 2, 3 and 2 replicates: 3 participants per replicate, one job each.
+    assert counts["power_participant"] == 6
+    assert not {"power_before", "power_learn", "power_after"} & set(counts.index)
     assert counts["power_process"] == counts["power_detect"] == counts["power_progress"] == 2
     assert counts["power_table"] == counts["power_figure"] == 1
     for job in jobs:

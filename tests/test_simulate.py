@@ -8,6 +8,7 @@ from casa_core.config import load_config
 from casa_core.io import read_trial, validate_paths
 from casa_core.scene import load_scene
 from casa_core.study import protocol, simulate
+from casa_core.vocabulary import LEARNED_NAMES, UNKNOWN_TASKS
 
 CONFIG = load_config("config/config.yaml", "config/ci.yaml")
 SCENE = load_scene()
@@ -105,3 +106,93 @@ def test_measured_training_times_go_to_their_own_timing_table(tmp_path):
     assert list(learning["participant"]) == ["p01", "p02"]  # sorted
     assert "train_seconds" not in learning and "train_seconds" in timing
     assert len(timing) == 2
+
+
+# --- the whole protocol in one call --------------------------------------------------
+
+STAGE_OPTIONS = ["--config", "config/config.yaml", "--config", "config/ci.yaml"]
+
+
+def _files(root) -> dict:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+def _protocol_args(root, participant: int = 2) -> list[str]:
+    rows = [str(root / "learning" / f"{task}.csv") for task in UNKNOWN_TASKS]
+    timings = [str(root / "learning" / f"{task}_timing.csv") for task in UNKNOWN_TASKS]
+    return [
+        "simulate", "protocol", *STAGE_OPTIONS, "--participant", str(participant),
+        "--before", str(root / "raw" / "before"), "--library", str(root / "intents"),
+        "--rows", *rows, "--timing-rows", *timings, "--out", str(root / "raw" / "after"),
+    ]  # fmt: skip
+
+
+def test_the_protocol_writes_the_bytes_of_the_three_stages(tmp_path):
+    # Participant 2 of the CI config through `casa simulate before`, `learn` of each
+    # unknown task and `after` (the robustness target's jobs), and through `casa simulate
+    # protocol` (the power target's one job): the same files, the same bytes, but for the
+    # measured training times.
+    from casa_core.cli import main
+
+    staged, whole = tmp_path / "stages", tmp_path / "protocol"
+    stage = [*STAGE_OPTIONS, "--participant", "2"]
+    before = str(staged / "raw" / "before")
+    assert main(["simulate", "before", *stage, "--out", before]) == 0
+    for task in UNKNOWN_TASKS:
+        learning = staged / "learning"
+        assert main(["simulate", "learn", *stage, "--task", task, "--before", before,
+                     "--library", str(staged / "intents" / task),
+                     "--out", str(learning / f"{task}.csv"),
+                     "--timing", str(learning / f"{task}_timing.csv")]) == 0  # fmt: skip
+    assert main(["simulate", "after", *stage, "--before", before,
+                 "--library", str(staged / "intents"),
+                 "--out", str(staged / "raw" / "after")]) == 0  # fmt: skip
+    assert main(_protocol_args(whole)) == 0
+    stages, protocol_files = _files(staged), _files(whole)
+    assert sorted(stages) == sorted(protocol_files)
+    # ci.yaml's config: 10 trials and 5 demonstrations of each unknown task before
+    # learning, each a .json and a .csv; CASA after learning of each unknown task and
+    # the surveys; an intent, a learning row and a timing row per unknown task.
+    demonstrations = CONFIG["simulation"]["demonstrations"]
+    assert len([n for n in stages if n.startswith("raw/before/")]) == 2 * (10 + 2 * demonstrations)
+    assert len([n for n in stages if n.startswith("raw/after/")]) == 2 * 2 + 1
+    intents = {f"intents/{task}/{LEARNED_NAMES[task]}.intent.json" for task in UNKNOWN_TASKS}
+    assert intents <= set(stages)
+    timings = {name for name in stages if name.endswith("_timing.csv")}
+    assert len(timings) == len(UNKNOWN_TASKS)
+    for name in set(stages) - timings:
+        assert stages[name] == protocol_files[name], name
+    for name in timings:
+        one, other = (pd.read_csv(root / name) for root in (staged, whole))
+        assert (one["train_seconds"] > 0).all() and (other["train_seconds"] > 0).all()
+        pd.testing.assert_frame_equal(one.drop(columns="train_seconds"),
+                                      other.drop(columns="train_seconds"))  # fmt: skip
+
+
+def test_the_protocol_refuses_missing_or_miscounted_outputs(tmp_path, capsys):
+    from casa_core.cli import main
+
+    args = _protocol_args(tmp_path)
+    rows, timings = args.index("--rows"), args.index("--timing-rows")
+    assert main(args[:rows] + args[timings:]) == 2
+    assert "casa simulate protocol: needs --rows" in capsys.readouterr().err
+    assert main(args[: rows + 2] + args[timings:]) == 2  # one CSV for two tasks
+    message = "--rows needs one CSV per unknown task (unknown_goal, unknown_skill), got 1"
+    assert message in capsys.readouterr().err
+    assert not tmp_path.exists() or not any(tmp_path.iterdir())
+
+
+def test_a_failed_protocol_leaves_no_folder_half_written(tmp_path, capsys, monkeypatch):
+    # The trials before learning fail after writing a log (a full disk): the command
+    # says so and exits 2, and no output folder, temporary or not, is left.
+    from casa_core.cli import main
+
+    def fail(index, scene, *, out_dir, **options):
+        (out_dir / "familiarization_NA.json").write_text("{}")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(simulate, "simulate_before_learning", fail)
+    assert main(_protocol_args(tmp_path)) == 2
+    assert "casa simulate protocol: [Errno 28] No space left on device" in capsys.readouterr().err
+    assert [p for p in tmp_path.rglob("*") if p.is_file()] == []
+    assert not (tmp_path / "raw" / "before").exists() and not list(tmp_path.rglob(".*"))

@@ -46,20 +46,25 @@ def _add_config_option(command) -> None:
 def _add_simulate(commands) -> None:
     command = commands.add_parser(
         "simulate",
-        help="simulate one participant of the study (one stage per call)",
+        help="simulate one participant of the study (one stage, or the whole protocol)",
         description="One stage of one simulated participant, as the workflow runs it "
-        "(workflow/rules/study.smk); the workflow chains the stages.",
+        "(workflow/rules/study.smk; the workflow chains the stages), or its whole protocol "
+        "in one call (protocol: the files of before, learn of each unknown task and after; "
+        "workflow/rules/power.smk).",
         **example(
             "casa simulate before --config config/config.yaml --participant 1 "
-            "--out data/raw/simulated/p1/before"
+            "--out data/raw/simulated/p1/before",
+            "casa simulate protocol --participant 1 --before raw/p1/before --library intents/p1 \\",
+            "    --rows learning/p1_unknown_goal.csv learning/p1_unknown_skill.csv \\",
+            "    --out raw/p1/after",
         ),
     )
     command.add_argument(
         "stage",
-        choices=["before", "learn", "after", "learning-table"],
+        choices=["before", "learn", "after", "protocol", "learning-table"],
         help="before: phases 1-3 and demonstrations; learn: one unknown "
-        "task's intent; after: CASA after learning and the surveys; "
-        "learning-table: gather the learn rows into one CSV",
+        "task's intent; after: CASA after learning and the surveys; protocol: the three, "
+        "each unknown task learned; learning-table: gather the learn rows into one CSV",
     )
     _add_config_option(command)
     command.add_argument(
@@ -69,23 +74,46 @@ def _add_simulate(commands) -> None:
         metavar="INDEX",
         help="1-based participant number",
     )
-    command.add_argument("--rows", nargs="*", default=[], help="learning-table: learn CSVs")
+    tasks = " ".join(vocabulary.UNKNOWN_TASKS)
     command.add_argument(
-        "--timing-rows", nargs="*", default=[], help="learning-table: learn timing CSVs"
+        "--rows",
+        nargs="*",
+        default=[],
+        help=f"learning-table: learn CSVs; protocol: the learn CSV to write of each unknown "
+        f"task, in the order {tasks}",
+    )
+    command.add_argument(
+        "--timing-rows",
+        nargs="*",
+        default=[],
+        help="learning-table: learn timing CSVs; protocol: the timing CSV to write of each "
+        "unknown task, in the same order",
     )
     command.add_argument(
         "--timing",
         help="learn: the CSV of its measured training time; learning-table: the timing table",
     )
-    command.add_argument("--out", required=True, help="folder (before/after) or CSV (learn)")
-    command.add_argument("--before", help="the participant's before-learning folder")
+    command.add_argument(
+        "--out", required=True, help="folder (before, after; protocol: the after one) or CSV"
+    )
+    command.add_argument(
+        "--before", help="the participant's before-learning folder (protocol: written)"
+    )
     command.add_argument("--task", choices=vocabulary.UNKNOWN_TASKS, help="learn: task")
-    command.add_argument("--library", help="learn/after: the participant's intent library")
+    command.add_argument(
+        "--library",
+        help="learn/after: the participant's intent library; protocol: the folder in which "
+        "each unknown task's intent goes to its own <task> folder",
+    )
     command.set_defaults(func=_simulate)
 
 
 #: The options each stage needs besides --out.
-STAGE_OPTIONS = {"learn": ("before", "task", "library"), "after": ("before", "library")}
+STAGE_OPTIONS = {
+    "learn": ("before", "task", "library"),
+    "after": ("before", "library"),
+    "protocol": ("before", "library", "rows"),
+}
 
 
 def _simulate(args) -> int:
@@ -95,6 +123,16 @@ def _simulate(args) -> int:
     if missing:
         print(f"casa simulate {args.stage}: needs {', '.join(missing)}", file=sys.stderr)
         return 2
+    if args.stage == "protocol":
+        tasks = len(vocabulary.UNKNOWN_TASKS)
+        for option, paths in (("--rows", args.rows), ("--timing-rows", args.timing_rows)):
+            if paths and len(paths) != tasks:
+                print(
+                    f"casa simulate protocol: {option} needs one CSV per unknown task "
+                    f"({', '.join(vocabulary.UNKNOWN_TASKS)}), got {len(paths)}",
+                    file=sys.stderr,
+                )
+                return 2
     try:
         return _run_stage(args)
     except (LogError, OSError, ValueError) as error:
@@ -126,7 +164,9 @@ def _run_stage(args) -> int:
     inference = simulate.inference_preset(config)
     index = args.participant - 1
     pid = simulate.participant_id(index)
-    if args.stage == "before":
+    if args.stage == "protocol":
+        written = _protocol(args, index, scene, simulation=simulation, inference=inference)
+    elif args.stage == "before":
         written = simulate.simulate_before_learning(
             index, scene, simulation=simulation, out_dir=Path(args.out), inference=inference
         )
@@ -157,6 +197,35 @@ def _run_stage(args) -> int:
         )
     print(f"casa simulate {args.stage}: participant {pid}, {len(written)} file(s)")
     return 0
+
+
+def _protocol(args, index: int, scene: Scene, *, simulation: dict, inference) -> list:
+    """``casa simulate protocol``: every folder is filled aside and renamed when all are done."""
+    from pathlib import Path
+
+    import pandas as pd
+
+    from casa_core.io.atomic import atomic_folders, write_csv
+    from casa_core.study import simulate
+
+    tasks = vocabulary.UNKNOWN_TASKS
+    folders = [Path(args.before), Path(args.out), *(Path(args.library) / task for task in tasks)]
+    with atomic_folders(*folders) as (before, after, *libraries):
+        run = simulate.simulate_protocol(
+            index,
+            scene,
+            simulation=simulation,
+            before_dir=before,
+            after_dir=after,
+            libraries=dict(zip(tasks, libraries, strict=True)),
+            inference=inference,
+        )
+    tables = [*zip(args.rows, run.rows, strict=True)]
+    if args.timing_rows:
+        tables += zip(args.timing_rows, run.timings, strict=True)
+    for path, row in tables:
+        write_csv(path, pd.DataFrame([row]))
+    return [*run.before, *run.learned, *run.after, *(path for path, _ in tables)]
 
 
 def _add_case_study(commands) -> None:

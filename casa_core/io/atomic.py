@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import io
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -26,8 +27,9 @@ from pathlib import Path
 
 import pandas as pd
 
-#: Permissions of every output: the owner writes, everyone reads.
+#: Permissions of every output: the owner writes, everyone reads (and lists folders).
 FILE_MODE = 0o644
+FOLDER_MODE = 0o755
 
 
 @contextmanager
@@ -93,6 +95,44 @@ def atomic_paths(*paths: Path | str) -> Iterator[list[Path]]:
     except BaseException:
         for tmp in temporaries:
             tmp.unlink(missing_ok=True)
+        raise
+
+
+@contextmanager
+def atomic_folders(*paths: Path | str) -> Iterator[list[Path]]:
+    """Temporary folders beside ``paths``; all renamed to them only when the block succeeds.
+
+    For outputs that are folders of files (a participant's logs): a failed or
+    interrupted run leaves no folder half filled under a target's name, and the
+    temporary ones are removed. A folder already at a target is replaced. The
+    temporary folders are hidden (their names start with ``.``), so that readers of
+    the folder around them skip them.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with atomic_folders(folder / "logs") as (logs,):
+    ...     _ = (logs / "a.csv").write_text("1")
+    >>> [p.relative_to(folder).as_posix() for p in sorted(folder.rglob("*"))]
+    ['logs', 'logs/a.csv']
+    """
+    targets = [Path(path) for path in paths]
+    temporaries: list[Path] = []
+    try:
+        for path in targets:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            temporaries.append(Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.")))
+        yield list(temporaries)
+        for tmp in temporaries:
+            os.chmod(tmp, FOLDER_MODE)
+        for tmp, path in zip(temporaries, targets, strict=True):
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path)
+            os.replace(tmp, path)
+    except BaseException:
+        for tmp in temporaries:
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
 
 

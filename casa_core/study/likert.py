@@ -26,11 +26,17 @@ Everything built from these answers is labelled simulated.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
+from casa_core import metrics
+from casa_core.io import SURVEY_COLUMNS, read_trial
 from casa_core.robot.keys import keys_to_action
-from casa_core.vocabulary import QUESTIONS
+from casa_core.scene import Scene
+from casa_core.tasks import intended_trajectory
+from casa_core.vocabulary import QUESTIONS, UNANALYSED_PHASES
 
 FIGHT_ANGLE = np.deg2rad(45.0)
 
@@ -78,3 +84,41 @@ def answer(latent: dict, bias: float, rng: np.random.Generator, noise: float = 0
         )
         for question in QUESTIONS
     }
+
+
+def simulated_surveys(
+    pid: str, folders: list[Path], *, scene: Scene, rng: np.random.Generator
+) -> pd.DataFrame:
+    """Likert answers (the model above) for every condition of one participant's logs."""
+    dt = scene.teleop.dt
+    trials = {}
+    for folder in folders:
+        for json_path in sorted(Path(folder).glob("*.json")):
+            meta, frame = read_trial(json_path.with_suffix(""))
+            if meta["phase"] in UNANALYSED_PHASES:
+                continue
+            measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt=dt)
+            trials[(meta["task"], meta["method"], meta["phase"])] = (measured, frame)
+    bias = 0.5 * rng.standard_normal()
+    rows = []
+    for (task, method, phase), (measured, frame) in sorted(trials.items()):
+        reference = next(
+            (m for (t, me, _), (m, _f) in trials.items() if t == task and me == "NA"), measured
+        )
+        effort_gain = 1 - measured["effort"] / max(reference["effort"], 1)
+        error_gain = 1 - measured["error"] / reference["error"] if reference["error"] > 0 else 0.0
+        felt = experience(frame)
+        latent = latent_impressions(felt["help"], felt["fight"], effort_gain, error_gain)
+        for question, score in answer(latent, bias, rng).items():
+            rows.append(
+                {
+                    "participant": pid,
+                    "task": task,
+                    "method": method,
+                    "phase": phase,
+                    "question": question,
+                    "score": score,
+                    "source": "simulated",
+                }
+            )
+    return pd.DataFrame(rows, columns=[*SURVEY_COLUMNS, "source"])

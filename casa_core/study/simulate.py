@@ -1,33 +1,35 @@
 """The simulated study and the expert case study, run through the robot in pybullet.
 
-Each participant is simulated in three separate jobs so that a workflow can
-spread them over cores: :func:`simulate_before_learning` (familiarization, Known
-Goal, the unknown tasks before learning and the demonstrations),
-:func:`learn_from_demonstrations` (one per unknown task) and
+A participant's protocol has three stages: :func:`simulate_before_learning`
+(familiarization, Known Goal, the unknown tasks before learning and the
+demonstrations), :func:`learn_from_demonstrations` (one per unknown task) and
 :func:`simulate_after_learning` (CASA with the learned intents, then the Likert
-answers). Every random draw comes from ``seed`` through
-``numpy.random.default_rng([seed, participant_index, stream])``, so a
-participant's trials do not depend on how many participants there are.
+answers). A workflow can run them as separate jobs, spread over cores, or all in one
+job with :func:`simulate_protocol`, which writes the same files. Every random draw
+comes from ``seed`` through ``numpy.random.default_rng([seed, participant_index,
+stream])``, so a participant's trials do not depend on how many participants there are.
 """
 
 from __future__ import annotations
 
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from casa_core import metrics
 from casa_core.config import default
 from casa_core.defaults import DEMONSTRATIONS
-from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_trial, write_surveys
+from casa_core.io import SURVEYS_NAME, write_surveys
 from casa_core.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.scene import Scene
 from casa_core.study import likert, protocol
 from casa_core.study.closed_loop import as_preset, known_goal_intents, run_trial, trial_intents
 from casa_core.study.participants import ParticipantParams, draw_participants, make_participant
 from casa_core.tasks import intended_trajectory
-from casa_core.vocabulary import LEARNED_NAMES, UNANALYSED_PHASES, UNKNOWN_TASKS
+from casa_core.vocabulary import LEARNED_NAMES, UNKNOWN_TASKS
 
 #: Stream numbers of default_rng([seed, index, stream]).
 PARAMS_STREAM, LIKERT_STREAM = 0, 9999
@@ -224,7 +226,7 @@ def simulate_after_learning(
                 )
                 result.write(out_dir / spec.stem)
                 written.append(out_dir / spec.stem)
-    surveys = simulated_surveys(
+    surveys = likert.simulated_surveys(
         pid,
         [Path(before_dir), out_dir],
         scene=scene,
@@ -234,42 +236,85 @@ def simulate_after_learning(
     return written
 
 
-def simulated_surveys(
-    pid: str, folders: list[Path], *, scene: Scene, rng: np.random.Generator
-) -> pd.DataFrame:
-    """Likert answers (:mod:`casa_core.study.likert`) for every condition of one participant."""
-    dt = scene.teleop.dt
-    trials = {}
-    for folder in folders:
-        for json_path in sorted(Path(folder).glob("*.json")):
-            meta, frame = read_trial(json_path.with_suffix(""))
-            if meta["phase"] in UNANALYSED_PHASES:
-                continue
-            measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt=dt)
-            trials[(meta["task"], meta["method"], meta["phase"])] = (measured, frame)
-    bias = 0.5 * rng.standard_normal()
-    rows = []
-    for (task, method, phase), (measured, frame) in sorted(trials.items()):
-        reference = next(
-            (m for (t, me, _), (m, _f) in trials.items() if t == task and me == "NA"), measured
+@dataclass(frozen=True)
+class ProtocolRun:
+    """What :func:`simulate_protocol` wrote for one participant, and its learning's CPU time.
+
+    ``before`` and ``after`` are the logs' stems (``after`` also holds ``surveys.csv``);
+    ``rows`` and ``timings`` are the ``learning.csv`` and ``learning_timing.csv`` rows of
+    each unknown task, in :data:`~casa_core.vocabulary.UNKNOWN_TASKS` order; ``learned`` the
+    intent files written; ``learning_cpu_s`` the CPU seconds of this process that each
+    learning step took (measured, so never written to a result).
+    """
+
+    before: list[Path]
+    rows: list[dict]
+    timings: list[dict]
+    learned: list[Path]
+    after: list[Path]
+    learning_cpu_s: list[float]
+
+
+def simulate_protocol(
+    index: int,
+    scene: Scene,
+    *,
+    simulation: dict,
+    before_dir: Path,
+    after_dir: Path,
+    libraries: Mapping[str, Path],
+    params: ParticipantParams | None = None,
+    pid: str | None = None,
+    inference: Preset | str = DEFAULT_PRESET,
+) -> ProtocolRun:
+    """One participant's whole protocol, the three stages one after the other, in one process.
+
+    :func:`simulate_before_learning` into ``before_dir``; :func:`learn_from_demonstrations`
+    of each unknown task into the folder ``libraries[task]``, with the seed
+    ``simulation["seed"] + index`` (as ``casa simulate learn``); then
+    :func:`simulate_after_learning` with the intents learned into ``after_dir``. The files
+    are the bytes the three stages write when run as separate jobs.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from casa_core.config import DEFAULT_CONFIG, load_config
+    >>> from casa_core.scene import load_scene
+    >>> settings = load_config(DEFAULT_CONFIG)["simulation"]
+    >>> settings = {**settings, "demonstrations": 0, "max_duration": 0.5}  # nothing to learn
+    >>> work = Path(tempfile.mkdtemp())
+    >>> run = simulate_protocol(
+    ...     0, load_scene(), simulation=settings, before_dir=work / "before",
+    ...     after_dir=work / "after", libraries={t: work / t for t in UNKNOWN_TASKS})
+    >>> len(run.before), [row["task"] for row in run.rows], run.learned, run.after
+    (10, ['unknown_goal', 'unknown_skill'], [], [])
+    """
+    from casa_core.library import intent_path
+
+    pid = pid or participant_id(index)
+    params = params or participant_params(index, simulation)
+    options = {"simulation": simulation, "params": params, "pid": pid, "inference": inference}
+    before = simulate_before_learning(index, scene, out_dir=before_dir, **options)
+    rows, timings, learned, seconds = [], [], [], []
+    for task in UNKNOWN_TASKS:
+        began = time.process_time()
+        row, timing = learn_from_demonstrations(
+            before_dir,
+            task,
+            scene=scene,
+            seed=int(simulation["seed"]) + index,
+            library=libraries[task],
+            pid=pid,
         )
-        effort_gain = 1 - measured["effort"] / max(reference["effort"], 1)
-        error_gain = 1 - measured["error"] / reference["error"] if reference["error"] > 0 else 0.0
-        felt = likert.experience(frame)
-        latent = likert.latent_impressions(felt["help"], felt["fight"], effort_gain, error_gain)
-        for question, score in likert.answer(latent, bias, rng).items():
-            rows.append(
-                {
-                    "participant": pid,
-                    "task": task,
-                    "method": method,
-                    "phase": phase,
-                    "question": question,
-                    "score": score,
-                    "source": "simulated",
-                }
-            )
-    return pd.DataFrame(rows, columns=[*SURVEY_COLUMNS, "source"])
+        seconds.append(time.process_time() - began)
+        rows.append(row)
+        timings.append(timing)
+        if not np.isnan(timing["train_seconds"]):  # learned from demonstrations
+            learned.append(intent_path(libraries[task], LEARNED_NAMES[task]))
+    after = simulate_after_learning(
+        index, scene, learned=learned, before_dir=before_dir, out_dir=after_dir, **options
+    )
+    return ProtocolRun(before, rows, timings, learned, after, seconds)
 
 
 #: The case study's expert: short delay, little noise, no lapses or wrong keys.
@@ -320,35 +365,14 @@ def run_case_study(
         "epsilon": case_study["epsilon"],
         "operator": case_study.get("operator") or default("case_study.operator"),
     }
-    before = work_dir / "logs" / "before"
-    simulate_before_learning(
-        0,
-        scene,
-        simulation=settings,
-        out_dir=before,
-        params=EXPERT,
-        pid="expert",
-        inference=inference,
-    )
-    learned = []
-    for task in UNKNOWN_TASKS:
-        learn_from_demonstrations(
-            before,
-            task,
-            scene=scene,
-            seed=case_study["seed"],
-            library=work_dir / "library",
-            pid="expert",
-        )
-        learned.append(work_dir / "library" / f"{LEARNED_NAMES[task]}.intent.json")
     after = work_dir / "logs" / "after"
-    simulate_after_learning(
+    simulate_protocol(
         0,
         scene,
         simulation=settings,
-        learned=learned,
-        before_dir=before,
-        out_dir=after,
+        before_dir=work_dir / "logs" / "before",
+        after_dir=after,
+        libraries=dict.fromkeys(UNKNOWN_TASKS, work_dir / "library"),
         params=EXPERT,
         pid="expert",
         inference=inference,

@@ -2,55 +2,51 @@
 # variant of power.variants and each replicate r of power.replicates, the simulated
 # study with its own seed (casa_core.power.replicate_seed) and as many participants as
 # the largest N of power.sizes; its study of N is its first N participants. Each
-# participant's stages are the robustness target's jobs (workflow/rules/robustness.smk)
-# on the replicate's config, so the DAG spreads over a cluster one participant stage a
-# job. Logs, intents and the steps table are temporary: a replicate keeps its
-# trials.csv and detections.csv. Not part of the default target.
-use rule robustness_before as power_before with:
+# participant's whole protocol is one job (casa simulate protocol: the files of the
+# robustness target's before, learn and after jobs), so that the DAG spreads over a
+# cluster one participant a job and each participant pays one job's start-up. Logs,
+# intents and the steps table are temporary: a replicate keeps its trials.csv and
+# detections.csv. Not part of the default target.
+rule power_participant:
     input:
         config=replicate_config_input,
         scene=config["scene"],
     output:
-        temp(directory(REPLICATE / "raw" / "p{p}" / "before")),
-    log:
-        f"{REPLICATE_LOGS}/p{{p}}_before.log",
-    benchmark:
-        REPLICATE_BENCHMARKS / "p{p}_before.tsv"
-
-
-use rule robustness_learn as power_learn with:
-    input:
-        before=REPLICATE / "raw" / "p{p}" / "before",
-        config=replicate_config_input,
-    output:
-        library=temp(directory(REPLICATE / "intents" / "p{p}" / "{task}")),
-        row=REPLICATE / "learning" / "p{p}_{task}.csv",
-        timing=REPLICATE / "learning" / "p{p}_{task}_timing.csv",
-    log:
-        f"{REPLICATE_LOGS}/p{{p}}_{{task}}_learn.log",
-    benchmark:
-        REPLICATE_BENCHMARKS / "p{p}_{task}_learn.tsv"
-
-
-use rule robustness_after as power_after with:
-    input:
-        before=REPLICATE / "raw" / "p{p}" / "before",
-        config=replicate_config_input,
-        libraries=expand(
-            REPLICATE / "intents" / "p{p}" / "{task}", task=UNKNOWN_TASKS, allow_missing=True
+        before=temp(directory(REPLICATE / "raw" / "p{p}" / "before")),
+        after=temp(directory(REPLICATE / "raw" / "p{p}" / "after")),
+        libraries=temp(
+            directory(
+                expand(
+                    REPLICATE / "intents" / "p{p}" / "{task}",
+                    task=UNKNOWN_TASKS,
+                    allow_missing=True,
+                )
+            )
         ),
-    output:
-        temp(directory(REPLICATE / "raw" / "p{p}" / "after")),
+        rows=expand(
+            REPLICATE / "learning" / "p{p}_{task}.csv", task=UNKNOWN_TASKS, allow_missing=True
+        ),
+        timings=expand(
+            REPLICATE / "learning" / "p{p}_{task}_timing.csv",
+            task=UNKNOWN_TASKS,
+            allow_missing=True,
+        ),
     log:
-        f"{REPLICATE_LOGS}/p{{p}}_after.log",
+        f"{REPLICATE_LOGS}/p{{p}}_protocol.log",
     benchmark:
-        REPLICATE_BENCHMARKS / "p{p}_after.tsv"
+        REPLICATE_BENCHMARKS / "p{p}_protocol.tsv"
+    conda:
+        "../envs/casa.yaml"
     params:
         library=lambda wildcards: POWER_INTERIM
         / wildcards.variant
         / f"r{wildcards.r}"
         / "intents"
         / f"p{wildcards.p}",
+    shell:
+        "exec casa simulate protocol --config {input.config} --participant {wildcards.p} "
+        "--before {output.before} --library {params.library} --rows {output.rows} "
+        "--timing-rows {output.timings} --out {output.after} > {log} 2>&1"
 
 
 use rule robustness_process as power_process with:
