@@ -33,7 +33,7 @@ from casa_core.stats.power import (
     replicate_detections,
     wilson_interval,
 )
-from casa_core.vocabulary import CASA_AFTER_LEARNING, CASA_BEFORE_LEARNING
+from casa_core.vocabulary import CASA_AFTER_LEARNING, CASA_BEFORE_LEARNING, UNKNOWN_TASKS
 
 # --- seeds and configs ---------------------------------------------------------------
 
@@ -318,6 +318,13 @@ def test_a_dry_run_gives_each_replicate_its_jobs_seed_and_files(tmp_path):
     # ci.yaml: sizes 2, 3 and 2 replicates: 3 participants per replicate, one job each.
     assert counts["power_participant"] == 6
     assert not {"power_before", "power_learn", "power_after"} & set(counts.index)
+    for job in jobs:
+        if job["rule"] == "power_participant":
+            # Its participant's before and after logs, an intent library, a learning row
+            # and a timing row per unknown task: the files of the robustness stages.
+            p = job["shell"].split("--participant ")[1].split()[0]
+            assert len(job["output"]) == 2 + 3 * len(UNKNOWN_TASKS), job
+            assert all(f"/p{p}/" in path or f"/p{p}_" in path for path in job["output"]), job
     assert counts["power_process"] == counts["power_detect"] == counts["power_progress"] == 2
     assert counts["power_table"] == counts["power_figure"] == 1
     for job in jobs:
