@@ -22,7 +22,7 @@ import os
 import shutil
 import tempfile
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
 
 import pandas as pd
@@ -63,7 +63,38 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
 
 
 @contextmanager
-def atomic_paths(*paths: Path | str) -> Iterator[list[Path]]:
+def _renamed_when_done(paths, *, folders: bool) -> Iterator[list[Path]]:
+    """Temporary files (or folders) beside ``paths``, renamed to them when the block succeeds."""
+    targets = [Path(path) for path in paths]
+    temporaries: list[Path] = []
+    try:
+        for path in targets:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            if folders:
+                temporaries.append(Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.")))
+            else:
+                fd, tmp = tempfile.mkstemp(
+                    dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix
+                )
+                os.close(fd)
+                temporaries.append(Path(tmp))
+        yield list(temporaries)
+        for tmp in temporaries:
+            os.chmod(tmp, FOLDER_MODE if folders else FILE_MODE)
+        for tmp, path in zip(temporaries, targets, strict=True):
+            if folders and path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path)
+            os.replace(tmp, path)
+    except BaseException:
+        for tmp in temporaries:
+            if folders:
+                shutil.rmtree(tmp, ignore_errors=True)
+            else:
+                tmp.unlink(missing_ok=True)
+        raise
+
+
+def atomic_paths(*paths: Path | str) -> AbstractContextManager[list[Path]]:
     """Temporary paths beside ``paths``; all renamed to them only when the block succeeds.
 
     For outputs that belong together (a dataset's tables): an error while writing any
@@ -79,27 +110,10 @@ def atomic_paths(*paths: Path | str) -> Iterator[list[Path]]:
     >>> [p.name for p in sorted(folder.iterdir())]
     ['a.csv', 'b.csv']
     """
-    targets = [Path(path) for path in paths]
-    temporaries: list[Path] = []
-    try:
-        for path in targets:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-            os.close(fd)
-            temporaries.append(Path(tmp))
-        yield list(temporaries)
-        for tmp in temporaries:
-            os.chmod(tmp, FILE_MODE)
-        for tmp, path in zip(temporaries, targets, strict=True):
-            os.replace(tmp, path)
-    except BaseException:
-        for tmp in temporaries:
-            tmp.unlink(missing_ok=True)
-        raise
+    return _renamed_when_done(paths, folders=False)
 
 
-@contextmanager
-def atomic_folders(*paths: Path | str) -> Iterator[list[Path]]:
+def atomic_folders(*paths: Path | str) -> AbstractContextManager[list[Path]]:
     """Temporary folders beside ``paths``; all renamed to them only when the block succeeds.
 
     For outputs that are folders of files (a participant's logs): a failed or
@@ -117,23 +131,7 @@ def atomic_folders(*paths: Path | str) -> Iterator[list[Path]]:
     >>> [p.relative_to(folder).as_posix() for p in sorted(folder.rglob("*"))]
     ['logs', 'logs/a.csv']
     """
-    targets = [Path(path) for path in paths]
-    temporaries: list[Path] = []
-    try:
-        for path in targets:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            temporaries.append(Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.")))
-        yield list(temporaries)
-        for tmp in temporaries:
-            os.chmod(tmp, FOLDER_MODE)
-        for tmp, path in zip(temporaries, targets, strict=True):
-            if path.is_dir() and not path.is_symlink():
-                shutil.rmtree(path)
-            os.replace(tmp, path)
-    except BaseException:
-        for tmp in temporaries:
-            shutil.rmtree(tmp, ignore_errors=True)
-        raise
+    return _renamed_when_done(paths, folders=True)
 
 
 def atomic_write_bytes(path: Path | str, data: bytes) -> Path:
