@@ -102,6 +102,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from casa_core.robot.keys import AXIS_KEYS
+from casa_core.study import _operator_kernels as _kernels
 from casa_core.study.path_geometry import row_lengths, unit_tangents
 
 # Rotation error is compared with position error at this many metres per radian.
@@ -115,6 +116,7 @@ VELOCITY_FILTER = 1.0
 #: Shortest interval from a change of the predictive operator's keys to its next press, s.
 REFRACTORY = 0.25
 _SCALE = np.array([1.0, 1.0, 1.0, ROT_TO_METRES])  # [x, y, z, rot] with rot in metres
+_SCALE_FLOATS = tuple(_SCALE.tolist())
 
 
 @dataclass(frozen=True)
@@ -242,12 +244,12 @@ class SimulatedParticipant:
 
     def _track(self, perceived: np.ndarray) -> int:
         """Advance the progress along the path to ``perceived``; the steering point's index."""
-        here = perceived.copy()
-        here[3] *= ROT_TO_METRES
-        window = self._scaled[self._progress : self._progress + 40]
-        self._progress += int(row_lengths(window - here).argmin())
-        path = np.cumsum(self._steps[self._progress :])
-        return self._progress + int(path.searchsorted(LOOKAHEAD))
+        # The nearest of the next 40 path points, then LOOKAHEAD of path further on.
+        progress, ahead = _kernels.track(
+            self._scaled, self._steps, self._progress, perceived, 40, LOOKAHEAD, ROT_TO_METRES
+        )
+        self._progress = int(progress)
+        return int(ahead)
 
     def _arrived(self, perceived: np.ndarray, ahead: int) -> bool:
         """Whether the steering point is the path's end and the arm is seen there."""
@@ -259,20 +261,15 @@ class SimulatedParticipant:
         )
 
     def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
-        magnitude = np.abs(error) * _SCALE
+        # Python floats: the same products as numpy's on 4 numbers, without its overhead.
+        error = error.tolist()
+        magnitude = [abs(e) * s for e, s in zip(error, _SCALE_FLOATS, strict=True)]
         # Hysteresis: a held key stays down until the error falls to a third of the deadband.
-        held_axes = {
-            axis
-            for axis, (plus, minus) in enumerate(AXIS_KEYS)
-            if plus in self._held or minus in self._held
-        }
-        thresholds = np.array(
-            [
-                self.params.deadband / 3 if axis in held_axes else self.params.deadband
-                for axis in range(4)
-            ]
-        )
-        wanted = [axis for axis in np.argsort(-magnitude) if magnitude[axis] > thresholds[axis]]
+        deadband, held = self.params.deadband, self._held
+        thresholds = [deadband / 3 if held.intersection(pair) else deadband for pair in AXIS_KEYS]
+        # Largest first, ties in axis order (as np.argsort sorts 4 numbers).
+        order = sorted(range(4), key=lambda axis: -magnitude[axis])
+        wanted = [axis for axis in order if magnitude[axis] > thresholds[axis]]
         chosen = set()
         for axis in wanted[: self.params.max_keys]:
             plus, minus = AXIS_KEYS[axis]
@@ -333,17 +330,15 @@ class PredictiveParticipant(SimulatedParticipant):
         if self._arrived(perceived, ahead):
             return None
         horizon = self.horizon
-        here = perceived * _SCALE
-        predicted = here + self._velocity * _SCALE * horizon
         start = self._progress
         last = len(self._scaled) - 1
         # The predicted position's nearest path point, searched ahead of the progress.
-        window = self._scaled[start : start + int(horizon / self.tick) + 40]
-        nearest = start + int(row_lengths(window - predicted).argmin())
+        stop = start + int(horizon / self.tick) + 40
+        here, nearest, offset = _kernels.predicted_offset(
+            self._scaled, _SCALE, perceived, self._velocity, horizon, start, stop
+        )
         tangent = self._tangents[nearest]
-        offset = predicted - self._scaled[nearest]
         along = float(offset @ tangent)
-        correction = -(offset - along * tangent)  # back to the path, across it
         wanted = min(int(self._times.searchsorted(self._times[start] + horizon)), last)
         behind = self._arc[wanted] - (self._arc[nearest] + along)
         threshold = self.params.deadband
@@ -351,11 +346,10 @@ class PredictiveParticipant(SimulatedParticipant):
             # Ending on a turn: done only within DONE_ROT_TOLERANCE of the end's angle.
             threshold = min(threshold, DONE_ROT_TOLERANCE * ROT_TO_METRES)
         threshold = threshold / 3 if self._pushing else threshold
-        self._pushing = behind > threshold
-        if self._pushing:
-            # Along the path; the axis it runs along most gets the whole shortfall.
-            correction += behind * tangent / abs(tangent).max()
-        elif wanted == last:
+        self._pushing = bool(behind > threshold)
+        # Back to the path across it; when pushing, along it too.
+        correction = _kernels.correction(offset, tangent, along, behind, self._pushing)
+        if not self._pushing and wanted == last:
             # Past the end now (not just predicted to arrive): back to the end.
             beyond = float((here - self._scaled[last]) @ self._tangents[last])
             if beyond > self.params.deadband:

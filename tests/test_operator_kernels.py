@@ -1,0 +1,181 @@
+"""The simulated operator's compiled geometry computes what its numpy formulas compute.
+
+``casa_core.study._operator_kernels`` replaces, in the operator's tick, a window's
+``row_lengths(...).argmin()``, ``np.cumsum(...).searchsorted(...)`` and the predictive
+operator's arithmetic on 4-vectors. Each kernel is held to the numpy expression it replaces,
+bit for bit, on random inputs with ties and with distances equal to a partial sum (where
+``<`` and ``<=`` part). The operators are then held, tick by tick, to a copy written with
+the numpy formulas (the expressions the kernels replace): both see the same states (the
+reference path, off it, stopped, past its end), draw from equally seeded streams and must
+hold the same keys on every tick.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from casa_core.robot.keys import AXIS_KEYS
+from casa_core.scene import load_scene
+from casa_core.study import _operator_kernels as kernels
+from casa_core.study import participants as part
+from casa_core.study.path_geometry import row_lengths
+from casa_core.tasks import intended_trajectory
+from casa_core.vocabulary import TASKS
+
+PARAMS = part.ParticipantParams(0.35, 0.01, 0.015, 0.3, 0.8, 0.2, 2)
+
+
+def test_nearest_row_is_the_argmin_of_the_row_lengths():
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        path = rng.normal(0.0, 0.05, size=(int(rng.integers(1, 60)), 4))
+        path[rng.integers(len(path), size=len(path) // 3)] = path[0]  # equal rows: ties
+        point = path[0] + rng.normal(0.0, 0.01, size=4) * rng.integers(2)
+        start = int(rng.integers(len(path)))
+        stop = start + int(rng.integers(1, 50))
+        expected = int(row_lengths(path[start:stop] - point).argmin())
+        assert kernels.nearest_row(path, start, stop, point) == expected
+
+
+def test_first_reaching_is_the_cumulative_sums_searchsorted():
+    rng = np.random.default_rng(1)
+    for _ in range(500):
+        steps = rng.uniform(0.0, 0.01, size=int(rng.integers(1, 80)))
+        steps[rng.integers(len(steps), size=len(steps) // 4)] = 0.0
+        start = int(rng.integers(len(steps)))
+        sums = np.cumsum(steps[start:])
+        # A distance between sums, equal to one, and beyond the last.
+        for distance in (rng.uniform(0, 0.3), sums[rng.integers(len(sums))], sums[-1] + 1):
+            expected = int(sums.searchsorted(distance))
+            assert kernels.first_reaching(steps, start, distance) == expected
+
+
+def test_predicted_offset_and_correction_are_the_numpy_arithmetic():
+    rng = np.random.default_rng(2)
+    scale = part._SCALE
+    for _ in range(300):
+        scaled = rng.normal(0.0, 0.2, size=(50, 4))
+        perceived, velocity = rng.normal(0.0, 0.2, size=4), rng.normal(0.0, 0.1, size=4)
+        horizon, start = float(rng.uniform(0.4, 1.2)), int(rng.integers(50))
+        here, nearest, offset = kernels.predicted_offset(
+            scaled, scale, perceived, velocity, horizon, start, start + 40
+        )
+        predicted = perceived * scale + velocity * scale * horizon
+        expected = start + int(row_lengths(scaled[start : start + 40] - predicted).argmin())
+        assert nearest == expected
+        assert np.array_equal(here, perceived * scale)
+        assert np.array_equal(offset, predicted - scaled[expected])
+        tangent, along, behind = rng.normal(size=4), float(rng.normal()), float(rng.normal())
+        across = -(offset - along * tangent)
+        assert np.array_equal(kernels.correction(offset, tangent, along, behind, False), across)
+        pushed = across + behind * tangent / abs(tangent).max()
+        assert np.array_equal(kernels.correction(offset, tangent, along, behind, True), pushed)
+
+
+class NumpyLookahead(part.SimulatedParticipant):
+    """The lookahead operator with its tick written in the numpy formulas."""
+
+    def _track(self, perceived):
+        here = perceived.copy()
+        here[3] *= part.ROT_TO_METRES
+        window = self._scaled[self._progress : self._progress + 40]
+        self._progress += int(row_lengths(window - here).argmin())
+        path = np.cumsum(self._steps[self._progress :])
+        return self._progress + int(path.searchsorted(part.LOOKAHEAD))
+
+    def _choose_keys(self, error):
+        magnitude = np.abs(error) * part._SCALE
+        held_axes = {
+            axis
+            for axis, (plus, minus) in enumerate(AXIS_KEYS)
+            if plus in self._held or minus in self._held
+        }
+        thresholds = np.array(
+            [self.params.deadband / 3 if a in held_axes else self.params.deadband for a in range(4)]
+        )
+        wanted = [a for a in np.argsort(-magnitude) if magnitude[a] > thresholds[a]]
+        chosen = set()
+        for axis in wanted[: self.params.max_keys]:
+            plus, minus = AXIS_KEYS[axis]
+            key = plus if error[axis] > 0 else minus
+            if key not in self._held and self.rng.random() < self.params.wrong_key:
+                key = self._wrong_key(key)
+            chosen.add(key)
+        return frozenset(chosen)
+
+
+class NumpyPredictive(part.PredictiveParticipant):
+    """The predictive operator with its tick written in the numpy formulas."""
+
+    _track = NumpyLookahead._track
+
+    def _error(self, perceived, t):
+        self._now = t
+        ahead = self._track(perceived)
+        self._estimate_velocity(perceived, t)
+        if self._arrived(perceived, ahead):
+            return None
+        horizon, scale = self.horizon, part._SCALE
+        here = perceived * scale
+        predicted = here + self._velocity * scale * horizon
+        start, last = self._progress, len(self._scaled) - 1
+        window = self._scaled[start : start + int(horizon / self.tick) + 40]
+        nearest = start + int(row_lengths(window - predicted).argmin())
+        tangent = self._tangents[nearest]
+        offset = predicted - self._scaled[nearest]
+        along = float(offset @ tangent)
+        correction = -(offset - along * tangent)
+        wanted = min(int(self._times.searchsorted(self._times[start] + horizon)), last)
+        behind = self._arc[wanted] - (self._arc[nearest] + along)
+        threshold = self.params.deadband
+        if wanted == last and abs(tangent[3]) > 0.5:
+            threshold = min(threshold, part.DONE_ROT_TOLERANCE * part.ROT_TO_METRES)
+        threshold = threshold / 3 if self._pushing else threshold
+        self._pushing = behind > threshold
+        if self._pushing:
+            correction += behind * tangent / abs(tangent).max()
+        elif wanted == last:
+            beyond = float((here - self._scaled[last]) @ self._tangents[last])
+            if beyond > self.params.deadband:
+                correction -= beyond * self._tangents[last]
+        return correction / scale
+
+    def _choose_keys(self, error):
+        chosen = NumpyLookahead._choose_keys(self, error)
+        # The refractory interval, as PredictiveParticipant._choose_keys applies it.
+        if chosen == self._held:
+            return chosen
+        if not chosen < self._held and self._now - self._changed_at < part.REFRACTORY - 1e-9:
+            return self._held
+        self._changed_at = self._now
+        return chosen
+
+
+def _states(reference, rng):
+    """Arm states along the path with drift, a stop, a detour and a run past the end."""
+    path = reference[:, 1:5]
+    ticks = np.linspace(0, len(path) - 1, 400).astype(int)
+    states = path[ticks] + np.cumsum(rng.normal(0.0, 0.002, size=(400, 4)), axis=0)
+    states[150:200] = states[150]  # stopped
+    states[220:260, :3] += 0.05  # pulled off the path
+    beyond = path[-1] + np.outer(np.linspace(0, 0.1, 60), [1.0, -0.5, 0.2, 0.3])
+    return np.concatenate([states, beyond])
+
+
+@pytest.mark.parametrize(
+    ("fast", "plain"),
+    [(part.PredictiveParticipant, NumpyPredictive), (part.SimulatedParticipant, NumpyLookahead)],
+)
+@pytest.mark.parametrize("task", TASKS)
+def test_the_operator_holds_the_keys_of_its_numpy_formulas_on_every_tick(task, fast, plain):
+    reference = intended_trajectory(task, load_scene())
+    states = _states(reference, np.random.default_rng(3))
+    operators = [cls(PARAMS, reference, rng=np.random.default_rng(4)) for cls in (fast, plain)]
+    pressed = 0
+    for tick, state in enumerate(states):
+        fast, plain = (operator.keys(tick * 0.05, state) for operator in operators)
+        assert fast == plain, tick
+        pressed += bool(fast)
+    assert pressed > 50  # the comparison covers ticks with keys held
+    assert operators[0].rng.random() == operators[1].rng.random()  # the same draws
