@@ -56,6 +56,21 @@ def small_frame() -> pd.DataFrame:
     )
 
 
+def test_write_trial_returns_the_trial_as_read_back(tmp_path):
+    # A caller keeps write_trial's return instead of reading the files again, so it must
+    # be read_trial's answer: the same metadata and the same table, bit for bit, also for
+    # floats that the CSV text writes as their shortest repr (1/3, subnormal, near the bound).
+    rng = np.random.default_rng(0)
+    frame = trial_frame("known_goal", intents=("green", "purple"), rng=rng)
+    frame.loc[:3, "x"] = [1 / 3, 5e-324, 1.9999999999999998, -0.0]
+    frame["y"] += rng.normal(0.0, 1e-3, size=len(frame))
+    kept = write_trial(tmp_path / "trial", META, frame)
+    meta, read = read_trial(tmp_path / "trial")
+    assert kept[0] == meta
+    pd.testing.assert_frame_equal(kept[1], read, check_exact=True)
+    assert all(np.array_equal(kept[1][c], read[c]) for c in read.columns if c != "keys")
+
+
 def test_round_trip_keeps_every_value(tmp_path):
     frame = small_frame()
     write_trial(tmp_path / "p01" / "trial.1", META, frame)

@@ -14,7 +14,7 @@ Examples
 ...         "phase": "no_misspecification", "source": "simulated"}
 >>> frame = pd.DataFrame({"t": [0.0, 0.05], "x": [0.45, 0.4525], "y": [-0.22, -0.22],
 ...                       "z": [0.38, 0.38], "rot": [0.0, 0.0], "keys": ["x+", ""]})
->>> write_trial(f"{folder}/p01/trial", meta, frame)
+>>> _ = write_trial(f"{folder}/p01/trial", meta, frame)
 >>> read_meta, read_frame = read_trial(f"{folder}/p01/trial")
 >>> read_meta["schema"], read_frame["keys"].tolist()
 ('casa-trial/1', ['x+', ''])
@@ -304,8 +304,10 @@ def _keys_cell(value) -> str:
     return value
 
 
-def write_trial(stem: Path | str, meta: dict, frame: pd.DataFrame) -> None:
+def write_trial(stem: Path | str, meta: dict, frame: pd.DataFrame) -> tuple[dict, pd.DataFrame]:
     """Validate a trial and write it as ``<stem>.json`` and ``<stem>.csv``, each atomically.
+
+    Returns the trial as :func:`read_trial` reads it back (the checks parse the text).
 
     Parameters
     ----------
@@ -352,12 +354,13 @@ def write_trial(stem: Path | str, meta: dict, frame: pd.DataFrame) -> None:
     csv_text = frame_to_csv_text(frame)
     # Check exactly the text that will land on disk, with the reader's own rules.
     problems = check_meta(meta, json_file)
-    _, frame_problems = parse_trial_csv(csv_text, csv_file, meta=None if problems else meta)
+    parsed, frame_problems = parse_trial_csv(csv_text, csv_file, meta=None if problems else meta)
     problems += frame_problems
     if errors(problems):
         raise LogError(problems)
     atomic_write_text(json_path, json_text)
     atomic_write_text(csv_path, csv_text)
+    return json.loads(json_text), parsed
 
 
 def write_surveys(path: Path | str, frame: pd.DataFrame) -> None:

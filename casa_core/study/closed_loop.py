@@ -49,14 +49,17 @@ class TrialResult:
     meta: dict
     frame: pd.DataFrame
 
-    def write(self, stem: Path | str) -> None:
-        """Write ``<stem>.json`` and ``<stem>.csv`` through :func:`casa_core.io.write_trial`."""
+    def write(self, stem: Path | str) -> tuple[dict, pd.DataFrame]:
+        """Write ``<stem>.json`` and ``<stem>.csv`` through :func:`casa_core.io.write_trial`.
+
+        Returns the trial as :func:`casa_core.io.read_trial` reads it back.
+        """
         if self.meta["method"] not in METHODS:
             raise ValueError(
                 f"method {self.meta['method']!r} cannot be logged: casa-trial/1 methods are "
                 f"{', '.join(METHODS)}; use the returned frame instead"
             )
-        write_trial(stem, self.meta, self.frame)
+        return write_trial(stem, self.meta, self.frame)
 
 
 def known_goal_intents(scene: Scene, names: Sequence[str] = KNOWN_GOALS, **options) -> list:

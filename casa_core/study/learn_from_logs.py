@@ -88,6 +88,7 @@ def learn_to_library(
     config: IRLConfig | None = None,
     phase: str | None = "demonstration",
     progress: Callable[[int, int], None] | None = None,
+    demonstrations: tuple[list, list[dict]] | None = None,
 ) -> tuple[Path, list[dict], float]:
     """Learn intent ``name`` from the logs in ``demos_folder`` and save it in ``library``.
 
@@ -95,12 +96,15 @@ def learn_to_library(
     scene ``objects`` (name -> position) are the cost's features
     (:meth:`MaxEntIRL.fit`). The task and participant stored default to those of
     the logs when they all agree (else ""); ``progress`` is
-    :class:`~casa_core.learning.maxent.MaxEntIRL`'s. Returns the file, the training history
-    and the training time in seconds.
+    :class:`~casa_core.learning.maxent.MaxEntIRL`'s. ``demonstrations``, when given, is
+    what :func:`read_demonstrations` returns for these logs, so they are not read again.
+    Returns the file, the training history and the training time in seconds.
     """
     config = IRLConfig() if config is None else config
     intent_path(library, name)  # a bad name fails before training
-    demos, metas = read_demonstrations(demos_folder, task, phase=phase)
+    if demonstrations is None:
+        demonstrations = read_demonstrations(demos_folder, task, phase=phase)
+    demos, metas = demonstrations
 
     def agreed(key: str) -> str:
         values = {str(m.get(key, "")) for m in metas}

@@ -26,6 +26,7 @@ Everything built from these answers is labelled simulated.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -87,14 +88,24 @@ def answer(latent: dict, bias: float, rng: np.random.Generator, noise: float = 0
 
 
 def simulated_surveys(
-    pid: str, folders: list[Path], *, scene: Scene, rng: np.random.Generator
+    pid: str,
+    folders: list[Path],
+    *,
+    scene: Scene,
+    rng: np.random.Generator,
+    logs: Mapping[Path, tuple[dict, pd.DataFrame]] | None = None,
 ) -> pd.DataFrame:
-    """Likert answers (the model above) for every condition of one participant's logs."""
+    """Likert answers (the model above) for every condition of one participant's logs.
+
+    The logs are the ``.json`` + ``.csv`` pairs in ``folders``; those in ``logs`` (by the
+    ``.json``'s path, as :func:`casa_core.io.write_trial` returns them) are not read again.
+    """
     dt = scene.teleop.dt
+    logs = logs or {}
     trials = {}
     for folder in folders:
         for json_path in sorted(Path(folder).glob("*.json")):
-            meta, frame = read_trial(json_path.with_suffix(""))
+            meta, frame = logs.get(json_path) or read_trial(json_path.with_suffix(""))
             if meta["phase"] in UNANALYSED_PHASES:
                 continue
             measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt=dt)

@@ -87,7 +87,7 @@ def _run(scene, spec, settings, params, rng, pid, sim, inference, intents=None):
     # The operator model (casa_core.study.participants); the schema's default if unset.
     operator = settings.get("operator") or default("simulation.operator")
     source = make_participant(params, reference, rng=rng, tick=scene.teleop.dt, operator=operator)
-    result = run_trial(
+    return run_trial(
         scene,
         spec.task,
         spec.method,
@@ -100,7 +100,14 @@ def _run(scene, spec, settings, params, rng, pid, sim, inference, intents=None):
         inference=inference,
         seed=int(settings["seed"]),
     )
-    return result
+
+
+def _write(result, stem: Path, logs: dict | None) -> Path:
+    """Write a trial's log; keep it in ``logs`` by its ``.json`` path, as read back."""
+    trial = result.write(stem)
+    if logs is not None:
+        logs[stem.with_name(f"{stem.name}.json")] = trial
+    return stem
 
 
 def simulate_before_learning(
@@ -112,8 +119,11 @@ def simulate_before_learning(
     params: ParticipantParams | None = None,
     pid: str | None = None,
     inference: Preset | str = DEFAULT_PRESET,
+    logs: dict | None = None,
 ) -> list[Path]:
     """Phases 1-3 and the demonstrations of one participant; returns the logs' stems.
+
+    ``logs``, if given, gets each log written by its ``.json`` path, as read back.
 
     After the CASA trial of each unknown task the robot checks for misspecification
     (:func:`casa_core.study.protocol.misspecification_detected`, noted in the log); with
@@ -139,16 +149,14 @@ def simulate_before_learning(
                 detected[spec.task] = protocol.misspecification_detected(result.frame, epsilon)
                 note = f"misspecification detected: {detected[spec.task]}"
                 result.meta["notes"] = "; ".join(filter(None, [result.meta.get("notes"), note]))
-            result.write(out_dir / spec.stem)
-            written.append(out_dir / spec.stem)
+            written.append(_write(result, out_dir / spec.stem, logs))
         stream = len(specs) + 1
         for task in protocol.demonstration_tasks(simulation["demonstrations_when"], detected):
             for spec in protocol.demonstrations(task, simulation["demonstrations"]):
                 rng = np.random.default_rng([seed, index, stream])
                 stream += 1
                 result = _run(scene, spec, simulation, params, rng, pid, sim, inference)
-                result.write(out_dir / spec.stem)
-                written.append(out_dir / spec.stem)
+                written.append(_write(result, out_dir / spec.stem, logs))
     return written
 
 
@@ -179,17 +187,12 @@ def learn_from_demonstrations(
     demo_stems = [p for p in Path(demos_dir).glob(f"{task}_demonstration_*.json")]
     if not demo_stems:
         return row, timing
+    read = read_demonstrations(demos_dir, task)  # once, for learning and its evidence
+    options = {"seed": seed, "task": task, "participant": pid, "demonstrations": read}
     path, _history, seconds = learn_to_library(
-        demos_dir,
-        name,
-        library=library,
-        objects=scene_objects(scene),
-        seed=seed,
-        task=task,
-        participant=pid,
+        demos_dir, name, library=library, objects=scene_objects(scene), **options
     )
-    demos, _ = read_demonstrations(demos_dir, task)
-    evidence = learning_evidence(load_intent(path).intent, demos)
+    evidence = learning_evidence(load_intent(path).intent, read[0])
     row.update(evidence)
     timing["train_seconds"] = seconds
     return row, timing
@@ -206,8 +209,12 @@ def simulate_after_learning(
     params: ParticipantParams | None = None,
     pid: str | None = None,
     inference: Preset | str = DEFAULT_PRESET,
+    logs: dict | None = None,
 ) -> list[Path]:
-    """Phase 4 (CASA with every learned intent), then ``surveys.csv`` for all conditions."""
+    """Phase 4 (CASA with every learned intent), then ``surveys.csv`` for all conditions.
+
+    The logs in ``logs`` (:func:`simulate_before_learning`'s) are not read again.
+    """
     from casa_core.robot.sim import ArmSimulation
 
     check_index(index)
@@ -215,7 +222,7 @@ def simulate_after_learning(
     params = params or participant_params(index, simulation)
     seed = int(simulation["seed"])
     out_dir = Path(out_dir)
-    written = []
+    written, logs = [], dict(logs or {})
     if learned:
         intents = trial_intents(scene, learned, inference=inference)
         with ArmSimulation(scene) as sim:
@@ -224,13 +231,13 @@ def simulate_after_learning(
                 result = _run(
                     scene, spec, simulation, params, rng, pid, sim, inference, intents=intents
                 )
-                result.write(out_dir / spec.stem)
-                written.append(out_dir / spec.stem)
+                written.append(_write(result, out_dir / spec.stem, logs))
     surveys = likert.simulated_surveys(
         pid,
         [Path(before_dir), out_dir],
         scene=scene,
         rng=np.random.default_rng([seed, index, LIKERT_STREAM]),
+        logs=logs,
     )
     write_surveys(out_dir / SURVEYS_NAME, surveys)
     return written
@@ -294,6 +301,7 @@ def simulate_protocol(
     pid = pid or participant_id(index)
     params = params or participant_params(index, simulation)
     options = {"simulation": simulation, "params": params, "pid": pid, "inference": inference}
+    options["logs"] = {}  # each log as written, for the surveys
     before = simulate_before_learning(index, scene, out_dir=before_dir, **options)
     rows, timings, learned, seconds = [], [], [], []
     for task in UNKNOWN_TASKS:
