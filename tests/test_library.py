@@ -214,8 +214,12 @@ def test_bad_intent_names_are_refused_before_writing(tmp_path):
 
 
 def write_demo_logs(folder, n=2, phase="demonstration", stem="demo"):
-    """Demonstration logs in the casa-trial/1 contract, written by the one writer."""
+    """Demonstration logs in the casa-trial/1 contract, written by the one writer.
+
+    Returns what the writer returned, by each log's ``.json`` path.
+    """
     rng = np.random.default_rng(7)
+    written = {}
     for i in range(n):
         t = np.arange(0.0, 3.0, 0.05)
         line = np.linspace([0.45, -0.22, 0.38], [0.45, -0.10, 0.38], len(t))
@@ -230,7 +234,8 @@ def write_demo_logs(folder, n=2, phase="demonstration", stem="demo"):
             "phase": phase,
             "source": "simulated",
         }
-        write_trial(folder / f"{stem}{i}", meta, frame)
+        written[folder / f"{stem}{i}.json"] = write_trial(folder / f"{stem}{i}", meta, frame)
+    return written
 
 
 def run_casa(*args):
@@ -273,6 +278,22 @@ def test_only_demonstrations_are_read_from_a_participant_folder(tmp_path):
     demos, metas = read_demonstrations(tmp_path, "unknown_goal")
     assert len(demos) == 2 and {m["phase"] for m in metas} == {"demonstration"}
     assert len(read_demonstrations(tmp_path, "unknown_goal", phase=None)[0]) == 5
+
+
+def test_demonstrations_kept_in_memory_are_those_read_from_their_files(tmp_path):
+    # The logs write_trial returned stand in for their files; a log not among them (the
+    # assisted ones here) is read. Both ways give the same arrays, metadata and errors.
+    kept = write_demo_logs(tmp_path, n=2)
+    write_demo_logs(tmp_path, n=3, phase="before_learning", stem="assisted")
+    kept.update(write_demo_logs(tmp_path, n=1, phase="before_learning", stem="late"))
+    for task, phase in [("unknown_goal", "demonstration"), ("unknown_goal", None), (None, None)]:
+        read = read_demonstrations(tmp_path, task, phase=phase)
+        fast = read_demonstrations(tmp_path, task, phase=phase, logs=kept)
+        assert fast[1] == read[1] and len(fast[0]) == len(read[0])
+        assert all(np.array_equal(a, b) for a, b in zip(fast[0], read[0], strict=True))
+    for logs in (None, kept):
+        with pytest.raises(ValueError, match="found phases: before_learning, demonstration"):
+            read_demonstrations(tmp_path, "unknown_goal", phase="after_learning", logs=logs)
 
 
 def test_cli_learn_names_the_phases_it_found_when_none_is_a_demonstration(tmp_path):

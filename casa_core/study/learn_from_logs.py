@@ -13,7 +13,11 @@ from casa_core.library import intent_path, save_intent
 
 
 def read_demonstrations(
-    folder: Path | str, task: str | None = None, *, phase: str | None = "demonstration"
+    folder: Path | str,
+    task: str | None = None,
+    *,
+    phase: str | None = "demonstration",
+    logs: Mapping[Path, tuple] | None = None,
 ) -> tuple[list, list[dict]]:
     """The demonstrations in ``folder`` (the casa-trial/1 logs below it, sorted).
 
@@ -23,7 +27,8 @@ def read_demonstrations(
     ``"demonstration"``), only the trials of that phase, so that a participant's
     folder can be given whole: its assisted trials, where the robot pulled the
     arm toward another intent, are not demonstrations. ``phase=None`` keeps
-    every phase.
+    every phase. The logs in ``logs`` (by the ``.json``'s path, as
+    :func:`casa_core.io.write_trial` returns them) are not read again.
 
     Returns
     -------
@@ -42,8 +47,16 @@ def read_demonstrations(
     if not folder.is_dir():
         raise ValueError(f"{folder}: demonstrations folder not found")
     stems = [p.with_suffix("") for p in find_files(folder) if p.suffix == ".json"]
-    demos, metas, skipped = [], [], set()
+    demos, metas, skipped, logs = [], [], set(), logs or {}
     for stem in stems:
+        if stem.with_suffix(".json") in logs:  # written and checked by write_trial
+            meta, frame = logs[stem.with_suffix(".json")]
+            if _wanted(meta, task, phase):
+                demos.append(frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float))
+                metas.append(meta)
+            elif task is None or meta.get("task") == task:
+                skipped.add(meta.get("phase"))
+            continue
         # A log whose valid metadata names another task or phase is skipped unread (its
         # table is the costly part); every log that is kept is read and validated whole.
         known, problems = load_meta(stem.with_suffix(".json"))

@@ -161,7 +161,7 @@ def simulate_before_learning(
 
 
 def learn_from_demonstrations(
-    demos_dir: Path, task: str, *, scene: Scene, seed: int, library: Path, pid: str
+    demos_dir: Path, task: str, *, scene: Scene, seed: int, library: Path, pid: str, logs=None
 ) -> tuple[dict, dict]:
     """Learn the intent of ``task`` from the participant's demonstrations into ``library``.
 
@@ -169,25 +169,21 @@ def learn_from_demonstrations(
     endpoint_error_m, final_tilt_deg``; empty values when the participant gave no
     demonstrations of the task) and the row of ``learning_timing.csv``
     (``participant, task, intent, train_seconds``): measured times are kept apart, so
-    that the results are the same bytes on every run.
+    that the results are the same bytes on every run. The logs in ``logs`` (by the
+    ``.json``'s path, as :func:`casa_core.io.write_trial` returns them) are not read again.
     """
     from casa_core.library import load_intent
     from casa_core.study.learn_from_logs import learn_to_library, read_demonstrations
     from casa_core.study.learning_evidence import learning_evidence, scene_objects
 
     name = LEARNED_NAMES[task]
-    row = {
-        "participant": pid,
-        "task": task,
-        "intent": name,
-        "endpoint_error_m": np.nan,
-        "final_tilt_deg": np.nan,
-    }
-    timing = {"participant": pid, "task": task, "intent": name, "train_seconds": np.nan}
+    which = {"participant": pid, "task": task, "intent": name}
+    row = {**which, "endpoint_error_m": np.nan, "final_tilt_deg": np.nan}
+    timing = {**which, "train_seconds": np.nan}
     demo_stems = [p for p in Path(demos_dir).glob(f"{task}_demonstration_*.json")]
     if not demo_stems:
         return row, timing
-    read = read_demonstrations(demos_dir, task)  # once, for learning and its evidence
+    read = read_demonstrations(demos_dir, task, logs=logs)  # once, for learning and evidence
     options = {"seed": seed, "task": task, "participant": pid, "demonstrations": read}
     path, _history, seconds = learn_to_library(
         demos_dir, name, library=library, objects=scene_objects(scene), **options
@@ -313,6 +309,7 @@ def simulate_protocol(
             seed=int(simulation["seed"]) + index,
             library=libraries[task],
             pid=pid,
+            logs=options["logs"],
         )
         seconds.append(time.process_time() - began)
         rows.append(row)
