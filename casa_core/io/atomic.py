@@ -27,6 +27,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from casa_core.io._csv_text import plain_csv_text
+
 #: Permissions of every output: the owner writes, everyone reads (and lists folders).
 FILE_MODE = 0o644
 FOLDER_MODE = 0o755
@@ -170,6 +172,9 @@ def frame_to_csv_text(frame: pd.DataFrame) -> str:
     >>> frame_to_csv_text(pd.DataFrame({"t": [0.0, 0.05], "keys": ["x+", ""]}))
     't,keys\\n0.0,x+\\n0.05,\\n'
     """
+    text = plain_csv_text(frame)  # the same text, faster, for a table of plain columns
+    if text is not None:
+        return text
     buffer = io.StringIO()
     frame.to_csv(buffer, index=False, lineterminator="\n")
     return buffer.getvalue()
