@@ -82,7 +82,7 @@ def inference_preset(config: dict) -> Preset:
     return preset(settings["preset"], evidence=settings["evidence"])
 
 
-def _run(scene, spec, settings, params, rng, pid, sim, inference, intents=None):
+def _run(scene, spec, settings, params, rng, pid, sim, inference, **options):
     reference = intended_trajectory(spec.task, scene)
     # The operator model (casa_core.study.participants); the schema's default if unset.
     operator = settings.get("operator") or default("simulation.operator")
@@ -93,12 +93,12 @@ def _run(scene, spec, settings, params, rng, pid, sim, inference, intents=None):
         spec.method,
         source,
         participant=pid,
-        intents=intents,
         phase=spec.phase,
         max_duration=settings["max_duration"],
         sim=sim,
         inference=inference,
         seed=int(settings["seed"]),
+        **options,
     )
 
 
@@ -212,6 +212,7 @@ def simulate_after_learning(
     The logs in ``logs`` (:func:`simulate_before_learning`'s) are not read again.
     """
     from casa_core.robot.sim import ArmSimulation
+    from casa_core.study.closed_loop import SharedFirstPlans
 
     check_index(index)
     pid = pid or participant_id(index)
@@ -221,12 +222,13 @@ def simulate_after_learning(
     written, logs = [], dict(logs or {})
     if learned:
         intents = trial_intents(scene, learned, inference=inference)
+        shared = SharedFirstPlans(intents)  # every trial starts at the scene's start
+        options = {"intents": intents, "on_tick": shared.on_tick}
         with ArmSimulation(scene) as sim:
             for offset, spec in enumerate(protocol.after_learning()):
                 rng = np.random.default_rng([seed, index, 1000 + offset])
-                result = _run(
-                    scene, spec, simulation, params, rng, pid, sim, inference, intents=intents
-                )
+                shared.seed()
+                result = _run(scene, spec, simulation, params, rng, pid, sim, inference, **options)
                 written.append(_write(result, out_dir / spec.stem, logs))
     surveys = likert.simulated_surveys(
         pid,
