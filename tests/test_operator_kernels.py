@@ -95,14 +95,13 @@ class NumpyLookahead(part.SimulatedParticipant):
             [self.params.deadband / 3 if a in held_axes else self.params.deadband for a in range(4)]
         )
         wanted = [a for a in np.argsort(-magnitude) if magnitude[a] > thresholds[a]]
-        chosen = set()
+        # The presses (unchanged by the fast path): a draw for each new key, then its miss.
+        pressed = []
         for axis in wanted[: self.params.max_keys]:
-            plus, minus = AXIS_KEYS[axis]
-            key = plus if error[axis] > 0 else minus
-            if key not in self._held and self.rng.random() < self.params.wrong_key:
-                key = self._wrong_key(key)
-            chosen.add(key)
-        return frozenset(chosen)
+            key = AXIS_KEYS[axis][0 if error[axis] > 0 else 1]
+            missed = key not in self._held and self.rng.random() < self.params.wrong_key
+            pressed.append(self._wrong_key(key) if missed else key)
+        return frozenset(pressed)
 
 
 class NumpyPredictive(part.PredictiveParticipant):
