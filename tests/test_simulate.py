@@ -196,37 +196,3 @@ def test_a_failed_protocol_leaves_no_folder_half_written(tmp_path, capsys, monke
     assert "casa simulate protocol: [Errno 28] No space left on device" in capsys.readouterr().err
     assert [p for p in tmp_path.rglob("*") if p.is_file()] == []
     assert not (tmp_path / "raw" / "before").exists() and not list(tmp_path.rglob(".*"))
-
-
-def test_trials_sharing_their_first_plans_log_what_planning_them_again_logs():
-    # Two trials of the same intents (the known goals and a planned pouring intent) from
-    # the scene's start, as after learning: with the first trial's first plans seeded into
-    # the second (SharedFirstPlans) and with every plan planned, the same logs to the bit.
-    from casa_core.robot.sim import ArmSimulation
-    from casa_core.skills import PouringIntent
-    from casa_core.study.closed_loop import SharedFirstPlans, known_goal_intents, run_trial
-    from casa_core.study.participants import make_participant
-    from casa_core.tasks import intended_trajectory
-
-    params = simulate.participant_params(0, CONFIG["simulation"])
-    frames = {}
-    for share in (False, True):
-        intents = [*known_goal_intents(SCENE), PouringIntent.from_scene(SCENE)]
-        shared = SharedFirstPlans(intents)
-        with ArmSimulation(SCENE) as sim:
-            for k, task in enumerate(UNKNOWN_TASKS):
-                reference = intended_trajectory(task, SCENE)
-                rng = np.random.default_rng(k)
-                source = make_participant(params, reference, rng=rng, operator="predictive")
-                if share:
-                    shared.seed()
-                frames[share, k] = run_trial(
-                    SCENE, task, "CASA", source, participant="p01", intents=intents,
-                    phase="after_learning", max_duration=1.0, sim=sim,
-                    on_tick=shared.on_tick if share else None,
-                ).frame  # fmt: skip
-    assert len(shared.plans) == 1  # the pouring intent's; the goals are not planned
-    for k in range(len(UNKNOWN_TASKS)):
-        pd.testing.assert_frame_equal(frames[False, k], frames[True, k], check_exact=True)
-    with pytest.raises(RuntimeError, match="started elsewhere"):
-        shared.on_tick(0.0, shared.start + 1e-3, frozenset(), 1.0)

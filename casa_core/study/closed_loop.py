@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from casa_core.assistant import Assistant
-from casa_core.defaults import DT, HORIZON
+from casa_core.defaults import DT
 from casa_core.intents import GoalIntent, Intent
 from casa_core.io import write_trial
 from casa_core.presets import DEFAULT_PRESET, Preset, preset
@@ -95,44 +95,6 @@ def trial_intents(
 
         intents += [load_intent(path).intent for path in learned]
     return intents
-
-
-class SharedFirstPlans:
-    """Trials of the same intents from the same start share each planned intent's first plan.
-
-    A trial's first plan of a :class:`~casa_core.planning.PlannedIntent` (at the
-    assistant's reset: from the start, the whole horizon) is its costliest, a cold one,
-    and depends only on the intent and the start. :meth:`on_tick` (a trial's ``on_tick``)
-    takes it at the first tick of the first trial, where asking the intent changes nothing
-    (it was just planned); :meth:`seed` gives it to the intents before each later trial
-    (:meth:`~casa_core.planning.PlannedIntent.seed_plan`), which leaves each intent as
-    planning it again would. A later trial must start where the first did (a trial's
-    start is the scene's, by inverse kinematics): ``on_tick`` checks that it did.
-    ``horizon`` is the assistant's (its default).
-    """
-
-    def __init__(self, intents: Sequence[Intent], *, horizon: float = HORIZON):
-        from casa_core.planning import PlannedIntent
-
-        self.intents = [intent for intent in intents if isinstance(intent, PlannedIntent)]
-        self.horizon = horizon
-        self.start: np.ndarray | None = None
-        self.plans: list = []
-
-    def seed(self) -> None:
-        """Give the intents their first plans of the first trial (none before it)."""
-        if self.start is not None:
-            for intent, plan in zip(self.intents, self.plans, strict=True):
-                intent.seed_plan(self.start, self.horizon, plan)
-
-    def on_tick(self, t: float, state, keys, alpha) -> None:
-        if t != 0.0:
-            return
-        if self.start is None:
-            self.start = np.array(state, dtype=float)
-            self.plans = [intent.plan(self.start, self.horizon) for intent in self.intents]
-        elif np.asarray(state, dtype=float).tobytes() != self.start.tobytes():
-            raise RuntimeError("a trial sharing first plans started elsewhere than the first")
 
 
 def as_preset(inference: Preset | str) -> Preset:

@@ -212,7 +212,6 @@ def simulate_after_learning(
     The logs in ``logs`` (:func:`simulate_before_learning`'s) are not read again.
     """
     from casa_core.robot.sim import ArmSimulation
-    from casa_core.study.closed_loop import SharedFirstPlans
 
     check_index(index)
     pid = pid or participant_id(index)
@@ -222,13 +221,12 @@ def simulate_after_learning(
     written, logs = [], dict(logs or {})
     if learned:
         intents = trial_intents(scene, learned, inference=inference)
-        shared = SharedFirstPlans(intents)  # every trial starts at the scene's start
-        options = {"intents": intents, "on_tick": shared.on_tick}
         with ArmSimulation(scene) as sim:
             for offset, spec in enumerate(protocol.after_learning()):
                 rng = np.random.default_rng([seed, index, 1000 + offset])
-                shared.seed()
-                result = _run(scene, spec, simulation, params, rng, pid, sim, inference, **options)
+                result = _run(
+                    scene, spec, simulation, params, rng, pid, sim, inference, intents=intents
+                )
                 written.append(_write(result, out_dir / spec.stem, logs))
     surveys = likert.simulated_surveys(
         pid,
