@@ -175,7 +175,7 @@ def _run_stage(args) -> int:
             Path(args.before),
             args.task,
             scene=scene,
-            seed=int(simulation["seed"]) + index,
+            seed=simulate.learning_seed(index, simulation),
             library=Path(args.library),
             pid=pid,
         )

@@ -70,6 +70,17 @@ def participant_params(index: int, simulation: dict) -> ParticipantParams:
     return draw_participants(1, simulation["population"], rng)[0]
 
 
+def learning_seed(index: int, simulation: dict) -> int:
+    """The seed of learning participant ``index``'s intents: ``simulation["seed"] + index``.
+
+    Examples
+    --------
+    >>> learning_seed(2, {"seed": 2021})
+    2023
+    """
+    return int(simulation["seed"]) + index
+
+
 def inference_preset(config: dict) -> Preset:
     """The inference preset of a workflow config's ``inference`` block.
 
@@ -274,7 +285,7 @@ def simulate_protocol(
 
     :func:`simulate_before_learning` into ``before_dir``; :func:`learn_from_demonstrations`
     of each unknown task into the folder ``libraries[task]``, with the seed
-    ``simulation["seed"] + index`` (as ``casa simulate learn``); then
+    :func:`learning_seed` (as ``casa simulate learn``); then
     :func:`simulate_after_learning` with the intents learned into ``after_dir``. The files
     are the bytes the three stages write when run as separate jobs.
 
@@ -306,7 +317,7 @@ def simulate_protocol(
             before_dir,
             task,
             scene=scene,
-            seed=int(simulation["seed"]) + index,
+            seed=learning_seed(index, simulation),
             library=libraries[task],
             pid=pid,
             logs=options["logs"],
