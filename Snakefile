@@ -32,7 +32,8 @@ include: "workflow/rules/stats.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/study.smk"
 include: "workflow/rules/report.smk"
-# `snakemake --cores all robustness`: the claims under each modelling variant.
+# The claims under each modelling variant; with the simulated study, part of the default
+# target (`snakemake --cores all robustness` builds it alone).
 include: "workflow/rules/robustness.smk"
 # `snakemake --cores all power`: the simulated power of H1-H3 against participants.
 include: "workflow/rules/power.smk"
@@ -47,3 +48,4 @@ rule all:
     input:
         all_outputs(),
         report_pages(),
+        rules.robustness.input if SIMULATE else [],

@@ -30,17 +30,15 @@ from dataclasses import dataclass
 from datetime import timedelta
 from pathlib import Path
 
-from casa_core.vocabulary import UNKNOWN_TASKS
-
 #: Where the jobs' benchmark files go, one folder per target (workflow/rules/*.smk).
 BENCHMARKS = Path("benchmarks")
 #: Where each unit's config is written: INTERIM / target / unit / "config.yaml".
 INTERIM = Path("data/interim")
 #: The targets that report progress and the word for their units.
 UNIT_WORDS = {"power": "replicates", "robustness": "variants"}
-#: The robustness jobs of a simulated participant (workflow/rules/robustness.smk): before
-#: learning, learning of each unknown task, after learning.
-ROBUSTNESS_PARTICIPANT_JOBS = ("before", *UNKNOWN_TASKS, "after")
+#: The robustness jobs of a simulated participant (workflow/rules/robustness.smk): its
+#: whole protocol.
+ROBUSTNESS_PARTICIPANT_JOBS = ("protocol",)
 #: The robustness jobs of a variant besides its participants': tables, statistics, the
 #: case study, the claims.
 ROBUSTNESS_EXTRA_JOBS = 4
@@ -144,6 +142,8 @@ def target_units(config: Mapping, target: str) -> dict[str, int]:
     >>> units = target_units(load_config(DEFAULT_CONFIG), "power")
     >>> len(units), units["default/r1"]
     (200, 26)
+    >>> target_units(load_config(DEFAULT_CONFIG), "robustness")["paper"]  # 11 participants, 4
+    15
     """
     from casa_core import power, variants
 

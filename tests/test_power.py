@@ -286,10 +286,10 @@ def test_progress_counts_units_and_estimates_the_time_left(tmp_path):
 def test_the_units_of_each_target_and_their_jobs():
     ci = load_config(CONFIG, CI)
     # A replicate: 1 job per participant (its whole protocol) x 3, its tables and its
-    # detections; a robustness variant: 4 jobs per participant (before, 2 learned
-    # intents, after) x 2 participants, its tables, statistics, case study and claims.
+    # detections; a robustness variant: 1 job per participant x 2, its tables,
+    # statistics, case study and claims.
     assert progress.target_units(ci, "power") == {"default/r1": 5, "default/r2": 5}
-    assert progress.target_units(ci, "robustness") == {"default": 12, "original": 12}
+    assert progress.target_units(ci, "robustness") == {"default": 6, "original": 6}
     with pytest.raises(ValueError, match="no target 'all'"):
         progress.target_units(ci, "all")
 
@@ -321,7 +321,7 @@ def test_a_dry_run_gives_each_replicate_its_jobs_seed_and_files(tmp_path):
     for job in jobs:
         if job["rule"] == "power_participant":
             # Its participant's before and after logs, an intent library, a learning row
-            # and a timing row per unknown task: the files of the robustness stages.
+            # and a timing row per unknown task: the robustness target's job's files.
             p = job["shell"].split("--participant ")[1].split()[0]
             assert len(job["output"]) == 2 + 3 * len(UNKNOWN_TASKS), job
             assert all(f"/p{p}/" in path or f"/p{p}_" in path for path in job["output"]), job

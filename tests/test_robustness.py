@@ -15,12 +15,13 @@ import yaml
 from test_logs_synthetic import ROOT
 from test_workflow import copy_workflow, snakemake
 
-from casa_core import cli, variants
+from casa_core import cli, progress, variants
 from casa_core.config import ConfigError, load_config
 from casa_core.figures.robustness import VERDICT_COLOURS, robustness_figure, verdict_grid
 from casa_core.stats import STATS_COLUMNS
 from casa_core.stats.claims import VERDICTS
 from casa_core.stats.robustness import ROBUSTNESS_COLUMNS, merge_variants
+from casa_core.vocabulary import UNKNOWN_TASKS
 
 CONFIG = ROOT / "config" / "config.yaml"
 CI = ROOT / "config" / "ci.yaml"
@@ -90,7 +91,7 @@ def test_a_variant_changes_only_its_overlay_and_keeps_the_seeds():
 
 
 def _jobs(text: str) -> list[dict]:
-    """The jobs of a dry run: rule, output paths and shell command of each."""
+    """The jobs of a dry run: rule, output paths, benchmark file and shell command of each."""
     jobs = []
     for block in re.split(r"\n(?=(?:local)?rule \w+:)", text):
         match = re.match(r"(?:local)?rule (\w+):", block)
@@ -98,10 +99,12 @@ def _jobs(text: str) -> list[dict]:
             continue
         output = re.search(r"^\s+output: (.*)$", block, re.M)
         shell = re.search(r"^Shell command: (.*)$", block, re.M)
+        benchmark = re.search(r"^\s+benchmark: (.*)$", block, re.M)
         jobs.append(
             {
                 "rule": match.group(1),
                 "output": output.group(1).split(", ") if output else [],
+                "benchmark": benchmark.group(1) if benchmark else "",
                 "shell": shell.group(1) if shell else "",
             }
         )
@@ -122,14 +125,20 @@ def dry_run(tmp_path, target: str):
 
 def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
     repo, jobs, counts = dry_run(tmp_path, "robustness")
-    # ci.yaml: 2 variants x 2 participants; learning per participant and unknown task.
-    assert counts["robustness_before"] == counts["robustness_after"] == 4
-    assert counts["robustness_learn"] == 8
+    # ci.yaml: 2 variants x 2 participants, one job each (its whole protocol).
+    assert counts["robustness_participant"] == 4
+    assert not {"robustness_before", "robustness_learn", "robustness_after"} & set(counts.index)
     assert counts["robustness_process"] == counts["robustness_claims"] == 2
     assert counts["robustness_case_study"] == 2
     assert counts["robustness_table"] == 1
     assert counts["robustness_progress"] == 2  # a line after each variant
     for job in jobs:
+        if job["rule"] == "robustness_participant":
+            # The participant's before and after logs, an intent library, a learning row
+            # and a timing row per unknown task, all kept.
+            p = job["shell"].split("--participant ")[1].split()[0]
+            assert len(job["output"]) == 2 + 3 * len(UNKNOWN_TASKS), job
+            assert all(f"/p{p}/" in path or f"/p{p}_" in path for path in job["output"]), job
         if job["rule"] == "robustness_table":
             continue
         for name in ("default", "original"):
@@ -144,6 +153,11 @@ def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
                     case_study = f"data/processed/robustness/{name}/case_study"
                     assert f"--case-steps {case_study}/steps.csv" in job["shell"]
                     assert f"--arbitration {case_study}/arbitration.csv" in job["shell"]
+    # casa progress counts a variant done when all its benchmarked jobs are.
+    units = progress.target_units(load_config(CONFIG, CI), "robustness")
+    for name, expected in units.items():
+        folder = f"benchmarks/robustness/{name}/"
+        assert sum(job["benchmark"].startswith(folder) for job in jobs) == expected, name
     written = {
         name: yaml.safe_load((repo / f"data/interim/robustness/{name}/config.yaml").read_text())
         for name in ("default", "original")
@@ -152,10 +166,19 @@ def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
     assert written["original"]["inference"]["preset"] == "original"
     assert {config["simulation"]["participants"] for config in written.values()} == {2}
     assert {config["simulation"]["seed"] for config in written.values()} == {2021}
-    # The default target does not include it.
+    # The default target includes the whole target, the same jobs; without the simulated
+    # study (simulate=false) it includes none of them.
     default = snakemake(repo, "--dry-run", "--configfile", "config/ci.yaml")
     assert default.returncode == 0, default.stderr
-    assert "robustness" not in default.stdout
+    in_default = pd.Series([job["rule"] for job in _jobs(default.stdout)]).value_counts()
+    own = counts.drop("robustness").to_dict()
+    assert {rule: in_default.get(rule) for rule in own} == own
+    assert "output: data/processed/robustness/claims.csv," in default.stdout
+    without = snakemake(
+        repo, "--dry-run", "--config", "simulate=false", "--configfile", "config/ci.yaml"
+    )
+    assert without.returncode == 0, without.stderr
+    assert "robustness" not in without.stdout
 
 
 def _claims_rows(variant: str, verdicts: dict[str, str]) -> pd.DataFrame:

@@ -48,8 +48,8 @@ def effective_config_file(path=Path("data/interim/config.yaml"), settings=None):
 CONFIG_FILE = effective_config_file()
 
 # The simulated study is the dataset data/raw/simulated, and the case study's tables
-# and figures join the default target (workflow/rules/study.smk); `--config
-# simulate=false` builds only the datasets already in data/raw.
+# and figures (workflow/rules/study.smk) and the robustness target join the default
+# target; `--config simulate=false` builds only the datasets already in data/raw.
 SIMULATE = config["simulate"]
 CASE_STUDY = config["simulate"]
 

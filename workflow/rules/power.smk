@@ -2,12 +2,11 @@
 # variant of power.variants and each replicate r of power.replicates, the simulated
 # study with its own seed (casa_core.power.replicate_seed) and as many participants as
 # the largest N of power.sizes; its study of N is its first N participants. Each
-# participant's whole protocol is one job (casa simulate protocol: the files of the
-# robustness target's before, learn and after jobs), so that the DAG spreads over a
-# cluster one participant a job and each participant pays one job's start-up. Logs,
-# intents and the steps table are temporary: a replicate keeps its trials.csv and
-# detections.csv. Not part of the default target.
-rule power_participant:
+# participant's whole protocol is one job, the robustness target's (casa simulate
+# protocol), so that the DAG spreads over a cluster one participant a job. Logs, intents
+# and the steps table are temporary: a replicate keeps its trials.csv and detections.csv.
+# Not part of the default target.
+use rule robustness_participant as power_participant with:
     input:
         config=replicate_config_input,
         scene=config["scene"],
@@ -35,18 +34,6 @@ rule power_participant:
         f"{REPLICATE_LOGS}/p{{p}}_protocol.log",
     benchmark:
         REPLICATE_BENCHMARKS / "p{p}_protocol.tsv"
-    conda:
-        "../envs/casa.yaml"
-    params:
-        library=lambda wildcards: POWER_INTERIM
-        / wildcards.variant
-        / f"r{wildcards.r}"
-        / "intents"
-        / f"p{wildcards.p}",
-    shell:
-        "exec casa simulate protocol --config {input.config} --participant {wildcards.p} "
-        "--before {output.before} --library {params.library} --rows {output.rows} "
-        "--timing-rows {output.timings} --out {output.after} > {log} 2>&1"
 
 
 use rule robustness_process as power_process with:

@@ -2,70 +2,54 @@
 # (config robustness.variants, casa_core/variants.py) and the paper's claims under each.
 # Each variant has its own config, logs, intents and tables below
 # data/interim/robustness/<variant> and data/processed/robustness/<variant>: variants
-# share nothing they write, and the same seeds. Not part of the default target.
+# share nothing they write, and the same seeds. Part of the default target unless
+# `--config simulate=false` (Snakefile).
 # Each job's time goes to its benchmark file; after each variant a line of progress
 # (variants done, time per variant, time left: casa progress) is printed and appended
 # to data/processed/robustness/progress.log.
 ROBUST_BENCHMARKS = BENCHMARKS / "robustness"
 
 
-rule robustness_before:
+# Each participant's whole protocol is one job (casa simulate protocol: the files of the
+# stage commands casa simulate before, learn and after, byte for byte), so that each
+# participant pays one job's start-up.
+rule robustness_participant:
     input:
         config=variant_config_input,
         scene=config["scene"],
     output:
-        directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before"),
-    log:
-        "logs/robustness/{variant}/p{p}_before.log",
-    benchmark:
-        ROBUST_BENCHMARKS / "{variant}" / "p{p}_before.tsv"
-    conda:
-        "../envs/casa.yaml"
-    shell:
-        "exec casa simulate before --config {input.config} --participant {wildcards.p} "
-        "--out {output} > {log} 2>&1"
-
-
-rule robustness_learn:
-    input:
-        before=ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before",
-        config=variant_config_input,
-    output:
-        library=directory(ROBUST_INTERIM / "{variant}" / "intents" / "p{p}" / "{task}"),
-        row=ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}.csv",
-        timing=ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}_timing.csv",
-    log:
-        "logs/robustness/{variant}/p{p}_{task}_learn.log",
-    benchmark:
-        ROBUST_BENCHMARKS / "{variant}" / "p{p}_{task}_learn.tsv"
-    conda:
-        "../envs/casa.yaml"
-    shell:
-        "exec casa simulate learn --config {input.config} --participant {wildcards.p} "
-        "--task {wildcards.task} --before {input.before} --library {output.library} "
-        "--out {output.row} --timing {output.timing} > {log} 2>&1"
-
-
-rule robustness_after:
-    input:
-        before=ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before",
-        config=variant_config_input,
-        libraries=expand(
-            ROBUST_INTERIM / "{{variant}}" / "intents" / "p{{p}}" / "{task}", task=UNKNOWN_TASKS
+        before=directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before"),
+        after=directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "after"),
+        libraries=directory(
+            expand(
+                ROBUST_INTERIM / "{variant}" / "intents" / "p{p}" / "{task}",
+                task=UNKNOWN_TASKS,
+                allow_missing=True,
+            )
         ),
-    output:
-        directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "after"),
+        rows=expand(
+            ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}.csv",
+            task=UNKNOWN_TASKS,
+            allow_missing=True,
+        ),
+        timings=expand(
+            ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}_timing.csv",
+            task=UNKNOWN_TASKS,
+            allow_missing=True,
+        ),
     log:
-        "logs/robustness/{variant}/p{p}_after.log",
+        "logs/robustness/{variant}/p{p}_protocol.log",
     benchmark:
-        ROBUST_BENCHMARKS / "{variant}" / "p{p}_after.tsv"
+        ROBUST_BENCHMARKS / "{variant}" / "p{p}_protocol.tsv"
     conda:
         "../envs/casa.yaml"
     params:
-        library=lambda wildcards: ROBUST_INTERIM / wildcards.variant / "intents" / f"p{wildcards.p}",
+        # The folder of the participant's libraries, one per unknown task.
+        library=lambda wildcards, output: Path(output.libraries[0]).parent,
     shell:
-        "exec casa simulate after --config {input.config} --participant {wildcards.p} "
-        "--before {input.before} --library {params.library} --out {output} > {log} 2>&1"
+        "exec casa simulate protocol --config {input.config} --participant {wildcards.p} "
+        "--before {output.before} --library {params.library} --rows {output.rows} "
+        "--timing-rows {output.timings} --out {output.after} > {log} 2>&1"
 
 
 rule robustness_process:
