@@ -75,8 +75,9 @@ def _cell(text) -> str:
 
 #: Where the claims are judged under other modelling choices, and the command that builds it.
 ROBUSTNESS_NOTE = (
-    "data/processed/robustness/results.md, built by `snakemake --cores all robustness` "
-    "(not by the default target), judges the same claims on the simulated study under the "
+    "data/processed/robustness/results.md, built with the simulated study by the default "
+    "target (alone: `snakemake --cores all robustness`), judges the same claims on the "
+    "simulated study under the "
     "other modelling choices the paper leaves open (inference preset, evidence, operator "
     "model), with the same participants and seeds."
 )
