@@ -31,8 +31,6 @@ import numpy as np
 #: A constant of the seed derivation, so that replicate seeds are not other draws of
 #: the config seed's streams (``default_rng([seed, participant, stream])``).
 POWER_STREAM = 7_000_001
-#: The jobs of one simulated participant (workflow/rules/power.smk): its whole protocol.
-PARTICIPANT_JOBS = ("protocol",)
 
 
 def replicate_seed(seed: int, replicate: int) -> int:
@@ -114,14 +112,3 @@ def replicate_config(variant_settings: Mapping, replicate: int) -> dict:
     built = copy.deepcopy(dict(variant_settings))
     built["simulation"]["seed"] = replicate_seed(built["simulation"]["seed"], replicate)
     return built
-
-
-def replicate_jobs(config: Mapping) -> int:
-    """The jobs of one replicate: each participant's, its tables and its detections.
-
-    Examples
-    --------
-    >>> replicate_jobs({"power": {"sizes": [2, 3]}})  # 3 participants, 1 job each, and 2
-    5
-    """
-    return len(PARTICIPANT_JOBS) * max(power_sizes(config)) + 2

@@ -4,7 +4,9 @@ Each job of these targets writes a Snakemake benchmark file (``benchmark:``, a T
 whose ``s`` is the job's wall time) under ``benchmarks/<target>/<unit>/``, a unit being
 one power replicate (``<variant>/r<replicate>``) or one robustness variant. From the
 files present, :func:`read_progress` counts the units and jobs done, the time per unit
-and the time left at the pace so far. A benchmark older than its unit's config
+and the time left at the pace so far. Only the benchmarks of the unit's jobs count, so that
+files left by jobs of another workflow version are not taken for its own. A benchmark
+older than its unit's config
 (``data/interim/<target>/<unit>/config.yaml``, rewritten when what the unit's jobs read
 changes) is from an earlier configuration and not counted; one left by a forced rerun
 (``--forcerun``) counts until its job runs again. Measured times stay in these files and
@@ -17,7 +19,7 @@ Examples
 >>> (root / "v" / "r1").mkdir(parents=True)
 >>> for job in ("a", "b"):
 ...     _ = (root / "v" / "r1" / f"{job}.tsv").write_text("s\\th:m:s\\n30.0\\t0:00:30\\n")
->>> done = read_progress(root, {"v/r1": 2, "v/r2": 2})
+>>> done = read_progress(root, {"v/r1": ("a", "b"), "v/r2": ("a", "b")})
 >>> done.units_done, done.jobs_done, done.seconds_per_unit
 (1, 2, 60.0)
 """
@@ -25,7 +27,7 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from datetime import timedelta
 from pathlib import Path
@@ -36,12 +38,14 @@ BENCHMARKS = Path("benchmarks")
 INTERIM = Path("data/interim")
 #: The targets that report progress and the word for their units.
 UNIT_WORDS = {"power": "replicates", "robustness": "variants"}
-#: The robustness jobs of a simulated participant (workflow/rules/robustness.smk): its
-#: whole protocol.
-ROBUSTNESS_PARTICIPANT_JOBS = ("protocol",)
-#: The robustness jobs of a variant besides its participants': tables, statistics, the
-#: case study, the claims.
-ROBUSTNESS_EXTRA_JOBS = 4
+#: The benchmark of a simulated participant's one job, its whole protocol
+#: (workflow/rules/robustness.smk and power.smk): ``p<participant>_protocol``.
+PARTICIPANT_JOB = "protocol"
+#: The benchmarks of a power replicate's jobs besides its participants': tables, detections.
+REPLICATE_JOBS = ("process", "detect")
+#: The benchmarks of a robustness variant's jobs besides its participants': tables,
+#: statistics, the case study, the claims.
+VARIANT_JOBS = ("process", "stats", "case_study", "claims")
 
 
 @dataclass(frozen=True)
@@ -91,26 +95,32 @@ def _job_seconds(path: Path) -> float:
 
 
 def read_progress(
-    root: Path | str, units: Mapping[str, int], *, configs: Mapping[str, Path] | None = None
+    root: Path | str,
+    units: Mapping[str, Collection[str]],
+    *,
+    configs: Mapping[str, Path] | None = None,
 ) -> Progress:
-    """The progress of a target whose unit ``u`` has ``units[u]`` jobs under ``root / u``.
+    """The progress of a target whose unit ``u`` has the jobs ``units[u]`` under ``root / u``.
 
-    A job is done when its benchmark file exists (Snakemake writes it when the job
-    ends) and is not older than the unit's config in ``configs`` (if given and present);
-    a unit when all its jobs are. The time left is the remaining jobs at the mean job
-    time so far, divided by the parallelism so far (job time done over the wall time
-    from the first job's start to the last one's end).
+    A job is done when its benchmark file ``root / u / <job>.tsv`` exists (Snakemake
+    writes it when the job ends) and is not older than the unit's config in ``configs``
+    (if given and present); a unit when all its jobs are. Other files in the folder are
+    not counted. The time left is the remaining jobs at the mean job time so far, divided
+    by the parallelism so far (job time done over the wall time from the first job's
+    start to the last one's end).
     """
     root = Path(root)
     configs = configs or {}
     done_units, jobs_done, job_time, unit_times = 0, 0, 0.0, []
     starts, ends = [], []
-    for unit, expected in units.items():
-        files = sorted((root / unit).glob("*.tsv"))
+    for unit, jobs in units.items():
+        files = [root / unit / f"{job}.tsv" for job in jobs]
         config = Path(configs[unit]) if unit in configs else None
         since = config.stat().st_mtime if config is not None and config.is_file() else -math.inf
         seconds = []
         for path in files:
+            if not path.is_file():
+                continue
             value, end = _job_seconds(path), path.stat().st_mtime
             if math.isnan(value) or end < since:
                 continue
@@ -119,10 +129,10 @@ def read_progress(
             ends.append(end)
         jobs_done += len(seconds)
         job_time += sum(seconds)
-        if len(seconds) >= expected:
+        if len(seconds) == len(jobs):
             done_units += 1
             unit_times.append(sum(seconds))
-    jobs_total = sum(units.values())
+    jobs_total = sum(len(jobs) for jobs in units.values())
     elapsed = max(ends) - min(starts) if ends else 0.0
     per_job = job_time / jobs_done if jobs_done else math.nan
     parallel = job_time / elapsed if elapsed > 0 else math.nan
@@ -133,28 +143,38 @@ def read_progress(
     )
 
 
-def target_units(config: Mapping, target: str) -> dict[str, int]:
-    """The units of ``target`` (``power`` or ``robustness``) and the jobs of each.
+def participant_jobs(participants: int) -> tuple[str, ...]:
+    """The benchmarks of the jobs of simulated participants 1 to ``participants``.
+
+    Examples
+    --------
+    >>> participant_jobs(2)
+    ('p1_protocol', 'p2_protocol')
+    """
+    return tuple(f"p{p}_{PARTICIPANT_JOB}" for p in range(1, participants + 1))
+
+
+def target_units(config: Mapping, target: str) -> dict[str, tuple[str, ...]]:
+    """The units of ``target`` (``power`` or ``robustness``) and their jobs' benchmarks.
 
     Examples
     --------
     >>> from casa_core.config import DEFAULT_CONFIG, load_config
     >>> units = target_units(load_config(DEFAULT_CONFIG), "power")
-    >>> len(units), units["default/r1"]
-    (200, 26)
-    >>> target_units(load_config(DEFAULT_CONFIG), "robustness")["paper"]  # 11 participants, 4
+    >>> len(units), len(units["default/r1"]), units["default/r1"][-3:]
+    (200, 26, ('p24_protocol', 'process', 'detect'))
+    >>> len(target_units(load_config(DEFAULT_CONFIG), "robustness")["paper"])  # 11 and 4
     15
     """
     from casa_core import power, variants
 
     if target == "power":
-        jobs = power.replicate_jobs(config)
+        jobs = participant_jobs(max(power.power_sizes(config))) + REPLICATE_JOBS
         replicates = range(1, config["power"]["replicates"] + 1)
         return {f"{v}/r{r}": jobs for v in power.power_variants(config) for r in replicates}
     if target == "robustness":
-        per_variant = len(ROBUSTNESS_PARTICIPANT_JOBS) * config["robustness"]["participants"]
-        per_variant += ROBUSTNESS_EXTRA_JOBS
-        return {name: per_variant for name in variants.variant_names(config)}
+        jobs = participant_jobs(config["robustness"]["participants"]) + VARIANT_JOBS
+        return {name: jobs for name in variants.variant_names(config)}
     raise ValueError(f"progress: no target {target!r} (targets: {', '.join(UNIT_WORDS)})")
 
 

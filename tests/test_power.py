@@ -266,21 +266,27 @@ def test_progress_counts_units_and_estimates_the_time_left(tmp_path):
     _benchmark(tmp_path / "v" / "r1" / "a.tsv", 10.0, 110.0)
     _benchmark(tmp_path / "v" / "r1" / "b.tsv", 10.0, 120.0)
     _benchmark(tmp_path / "v" / "r2" / "a.tsv", 10.0, 120.0)
-    done = progress.read_progress(tmp_path, {"v/r1": 2, "v/r2": 2})
+    jobs = ("a", "b")
+    done = progress.read_progress(tmp_path, {"v/r1": jobs, "v/r2": jobs})
     assert (done.units_done, done.units_total, done.jobs_done, done.jobs_total) == (1, 2, 3, 4)
     assert done.seconds_per_unit == 20.0
     assert done.elapsed == 20.0
     assert done.remaining == pytest.approx(10 / 1.5)
     assert done.line("power").startswith("power: 1/2 replicates done (3/4 jobs); 20 s")
-    nothing = progress.read_progress(tmp_path / "none", {"v/r1": 2})
+    nothing = progress.read_progress(tmp_path / "none", {"v/r1": jobs})
     assert "about unknown left" in nothing.line("power")
     # r1's config rewritten at t = 115 (a new configuration): its job that ended at 110
     # is from the earlier one and not counted; its job at 120 and r2's are.
     config = tmp_path / "r1.yaml"
     config.write_text("")
     os.utime(config, (115.0, 115.0))
-    fresh = progress.read_progress(tmp_path, {"v/r1": 2, "v/r2": 2}, configs={"v/r1": config})
+    fresh = progress.read_progress(tmp_path, {"v/r1": jobs, "v/r2": jobs}, configs={"v/r1": config})
     assert (fresh.units_done, fresh.jobs_done) == (0, 2)
+    # A benchmark that is not one of the unit's jobs (left by another workflow version's
+    # job) is not counted: r2 still has one of its two jobs done.
+    _benchmark(tmp_path / "v" / "r2" / "p1_before.tsv", 10.0, 120.0)
+    stale = progress.read_progress(tmp_path, {"v/r1": jobs, "v/r2": jobs})
+    assert (stale.units_done, stale.jobs_done) == (1, 3)
 
 
 def test_the_units_of_each_target_and_their_jobs():
@@ -288,8 +294,10 @@ def test_the_units_of_each_target_and_their_jobs():
     # A replicate: 1 job per participant (its whole protocol) x 3, its tables and its
     # detections; a robustness variant: 1 job per participant x 2, its tables,
     # statistics, case study and claims.
-    assert progress.target_units(ci, "power") == {"default/r1": 5, "default/r2": 5}
-    assert progress.target_units(ci, "robustness") == {"default": 6, "original": 6}
+    replicate = ("p1_protocol", "p2_protocol", "p3_protocol", "process", "detect")
+    variant = ("p1_protocol", "p2_protocol", "process", "stats", "case_study", "claims")
+    assert progress.target_units(ci, "power") == {"default/r1": replicate, "default/r2": replicate}
+    assert progress.target_units(ci, "robustness") == {"default": variant, "original": variant}
     with pytest.raises(ValueError, match="no target 'all'"):
         progress.target_units(ci, "all")
 
@@ -298,8 +306,8 @@ def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys, monkeypat
     monkeypatch.chdir(tmp_path)  # the units' configs are looked for below data/interim
     config = _overlay(tmp_path, {"power": {"sizes": [2], "replicates": 2}})
     # A replicate of 2 participants: 1 job each, its tables, its detections (4 jobs).
-    for job in range(4):
-        _benchmark(tmp_path / "b" / "power" / "default" / "r1" / f"{job}.tsv", 5.0, 1000.0 + job)
+    for i, job in enumerate(("p1_protocol", "p2_protocol", "process", "detect")):
+        _benchmark(tmp_path / "b" / "power" / "default" / "r1" / f"{job}.tsv", 5.0, 1000.0 + i)
     log = tmp_path / "progress.log"
     args = ["progress", "power", "--config", str(CONFIG), "--config", config]
     args += ["--benchmarks", str(tmp_path / "b"), "--done", "default/r1", "--append", str(log)]
