@@ -26,6 +26,9 @@ from casa_core.planning import PlannedIntent, PlannerConfig
 from casa_core.rotation import R0, end_effector_rotation
 from casa_core.scene import Scene
 
+#: Width over which the cost's distance (m) and chords are rounded, so gradients exist at 0.
+ROUNDING = 1e-3
+
 
 def cup_upright(rot: torch.Tensor) -> torch.Tensor:
     """The original's feature ``1 - (x-axis of the last link . world z)``: 0 upright, 2 inverted."""
@@ -62,7 +65,7 @@ class PouringIntent(PlannedIntent):
     about ``radius``) the spill term outweighs the pour term and the cup stays
     upright; near it only the pour term is left and the cup tilts. Being upright
     costs the same near and far, so the gate puts no barrier around the target.
-    ``d`` and the chords are smoothed over 1 mm / 1e-3 so that gradients exist
+    ``d`` and the chords are smoothed over 1 mm / 1e-3 (``ROUNDING``) so that gradients exist
     everywhere. ``scale * dt * d`` is a goal intent's ``distance_sum`` cost, so
     the two compare on one scale; the weights are metres per unit of chord (ours).
 
@@ -142,10 +145,10 @@ class PouringIntent(PlannedIntent):
         return self._planning_cost
 
     def state_cost(self, states: torch.Tensor) -> torch.Tensor:
-        d = _norm(states[..., :3] - self._target_t, 1e-3)
+        d = _norm(states[..., :3] - self._target_t, ROUNDING)
         axis = cup_axis(states[..., 3])
-        pour = _norm(axis - self._pour_axis, 1e-3)
-        spill = _norm(axis - self._up, 1e-3)
+        pour = _norm(axis - self._pour_axis, ROUNDING)
+        spill = _norm(axis - self._up, ROUNDING)
         far = 1.0 - torch.exp(-((d / self.radius) ** 2))
         return (
             self.scale * self.dt * (d + self.pour_weight * pour + self.spill_weight * far * spill)
@@ -186,7 +189,7 @@ class PouringCost:
                 R0[:, 0],
                 R0[:, 1],
                 [intent.scale * intent.dt, intent.pour_weight, intent.spill_weight],
-                [intent.radius, 1e-3],
+                [intent.radius, ROUNDING],
             ]
         )
 

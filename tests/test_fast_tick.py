@@ -31,7 +31,6 @@ from casa_core.robot.control_kernel import joint_velocities, joint_velocities_nu
 from casa_core.robot.sim import TOOL_LINK, ArmSimulation
 from casa_core.scene import load_scene
 from casa_core.skills import PouringIntent
-from casa_core.study.path_geometry import row_lengths
 
 
 @pytest.fixture(scope="module")
@@ -267,11 +266,6 @@ def test_the_whole_table_check_reads_what_the_cell_checks_read(what, text, meta,
     assert list(frame.dtypes) == list(want_frame.dtypes)
     if taken:
         assert problems == []
-
-
-def test_row_lengths_are_numpys_norms_to_the_bit():
-    rows = np.random.default_rng(5).normal(size=(200, 4)) * np.array([1.0, 1e-3, 10.0, 0.1])
-    np.testing.assert_array_equal(row_lengths(rows), np.linalg.norm(rows, axis=1))
 
 
 def test_the_scalar_blend_is_the_checked_one_to_the_bit():

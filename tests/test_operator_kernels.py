@@ -1,7 +1,7 @@
 """The simulated operator's compiled geometry computes what its numpy formulas compute.
 
 ``casa_core.study._operator_kernels`` replaces, in the operator's tick, a window's
-``row_lengths(...).argmin()``, ``np.cumsum(...).searchsorted(...)`` and the predictive
+``np.linalg.norm(..., axis=1).argmin()``, ``np.cumsum(...).searchsorted(...)`` and the predictive
 operator's arithmetic on 4-vectors. Each kernel is held to the numpy expression it replaces,
 bit for bit, on random inputs with ties and with distances equal to a partial sum (where
 ``<`` and ``<=`` part). The operators are then held, tick by tick, to a copy written with
@@ -19,14 +19,13 @@ from casa_core.robot.keys import AXIS_KEYS
 from casa_core.scene import load_scene
 from casa_core.study import _operator_kernels as kernels
 from casa_core.study import participants as part
-from casa_core.study.path_geometry import row_lengths
 from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import TASKS
 
 PARAMS = part.ParticipantParams(0.35, 0.01, 0.015, 0.3, 0.8, 0.2, 2)
 
 
-def test_nearest_row_is_the_argmin_of_the_row_lengths():
+def test_nearest_row_is_the_argmin_of_the_row_norms():
     rng = np.random.default_rng(0)
     for _ in range(500):
         path = rng.normal(0.0, 0.05, size=(int(rng.integers(1, 60)), 4))
@@ -34,7 +33,7 @@ def test_nearest_row_is_the_argmin_of_the_row_lengths():
         point = path[0] + rng.normal(0.0, 0.01, size=4) * rng.integers(2)
         start = int(rng.integers(len(path)))
         stop = start + int(rng.integers(1, 50))
-        expected = int(row_lengths(path[start:stop] - point).argmin())
+        expected = int(np.linalg.norm(path[start:stop] - point, axis=1).argmin())
         assert kernels.nearest_row(path, start, stop, point) == expected
 
 
@@ -62,7 +61,8 @@ def test_predicted_offset_and_correction_are_the_numpy_arithmetic():
             scaled, scale, perceived, velocity, horizon, start, start + 40
         )
         predicted = perceived * scale + velocity * scale * horizon
-        expected = start + int(row_lengths(scaled[start : start + 40] - predicted).argmin())
+        window = scaled[start : start + 40]
+        expected = start + int(np.linalg.norm(window - predicted, axis=1).argmin())
         assert nearest == expected
         assert np.array_equal(here, perceived * scale)
         assert np.array_equal(offset, predicted - scaled[expected])
@@ -80,7 +80,7 @@ class NumpyLookahead(part.SimulatedParticipant):
         here = perceived.copy()
         here[3] *= part.ROT_TO_METRES
         window = self._scaled[self._progress : self._progress + 40]
-        self._progress += int(row_lengths(window - here).argmin())
+        self._progress += int(np.linalg.norm(window - here, axis=1).argmin())
         path = np.cumsum(self._steps[self._progress :])
         return self._progress + int(path.searchsorted(part.LOOKAHEAD))
 
@@ -120,7 +120,7 @@ class NumpyPredictive(part.PredictiveParticipant):
         predicted = here + self._velocity * scale * horizon
         start, last = self._progress, len(self._scaled) - 1
         window = self._scaled[start : start + int(horizon / self.tick) + 40]
-        nearest = start + int(row_lengths(window - predicted).argmin())
+        nearest = start + int(np.linalg.norm(window - predicted, axis=1).argmin())
         tangent = self._tangents[nearest]
         offset = predicted - self._scaled[nearest]
         along = float(offset @ tangent)

@@ -53,6 +53,10 @@ def _walk_row(start, targets, norm, out):
         out[t, 0], out[t, 1], out[t, 2], out[t, 3] = x, y, z, r
 
 
+#: Adam's decay rates of the first and second moments, and its epsilon.
+ADAM_BETA1, ADAM_BETA2, ADAM_EPS = 0.9, 0.999, 1e-12
+
+
 @numba.njit(cache=True)
 def walk(starts, targets, norm, out):
     """The feasible trajectories ``out`` ``(B, n, 4)`` from ``starts`` ``(B, 4)``.
@@ -76,7 +80,7 @@ def adam_step(states, grad, grad_scale, row_costs, m, v, best, best_cost, starts
     walk from ``starts`` toward the target (:func:`_walk_row`). Returns the largest
     ``|new - old|`` over all states (NaN if any is NaN).
     """
-    beta1, beta2, eps = 0.9, 0.999, 1e-12
+    beta1, beta2, eps = ADAM_BETA1, ADAM_BETA2, ADAM_EPS
     batch, n = states.shape[0], states.shape[1]
     g = [0.0, 0.0, 0.0, 0.0]
     squared = [0.0, 0.0, 0.0, 0.0]

@@ -146,10 +146,6 @@ class Plan:
     iterations: int
 
 
-#: Adam's decay rates of the first and second moments (as in ``_kernels.adam_step``).
-_BETA1, _BETA2 = 0.9, 0.999
-
-
 def steps_left(time_left: float, dt: float) -> int:
     """Number of whole steps of ``dt`` in ``time_left`` seconds (never negative)."""
     return max(int(np.floor(max(float(time_left), 0.0) / dt + 1e-9)), 0)
@@ -299,8 +295,8 @@ def optimize(
             best_cost,
             start_u,
             lr,
-            1 - _BETA1**iterations,
-            1 - _BETA2**iterations,
+            1 - _kernels.ADAM_BETA1**iterations,
+            1 - _kernels.ADAM_BETA2**iterations,
             norm,
         )
         lr *= config.decay

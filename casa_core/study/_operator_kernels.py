@@ -21,9 +21,8 @@ from numba import njit
 def nearest_row(path, start, stop, point):
     """Index in ``path[start:stop]`` of the row nearest ``point`` (the first of equals).
 
-    The distances are ``row_lengths(path[start:stop] - point)``
-    (:func:`casa_core.study.path_geometry.row_lengths`): squares summed left to
-    right, then the square root, as numpy sums a row of 4.
+    The distances are ``np.linalg.norm(path[start:stop] - point, axis=1)``: squares
+    summed left to right, then the square root, as numpy sums a row of 4.
 
     Examples
     --------

@@ -49,27 +49,19 @@ def read_demonstrations(
     stems = [p.with_suffix("") for p in find_files(folder) if p.suffix == ".json"]
     demos, metas, skipped, logs = [], [], set(), logs or {}
     for stem in stems:
-        if stem.with_suffix(".json") in logs:  # written and checked by write_trial
-            meta, frame = logs[stem.with_suffix(".json")]
-            if _wanted(meta, task, phase):
-                demos.append(frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float))
-                metas.append(meta)
-            elif task is None or meta.get("task") == task:
+        json_path = stem.with_suffix(".json")
+        if json_path in logs:  # written and checked by write_trial
+            meta, frame = logs[json_path]
+        else:
+            # A log whose valid metadata names another task or phase is skipped unread (its
+            # table is the costly part); every log that is kept is read and validated whole.
+            meta, problems = load_meta(json_path)
+            valid = meta is not None and all(p.severity != "error" for p in problems)
+            if not valid or _wanted(meta, task, phase):
+                meta, frame = read_trial(stem)
+        if not _wanted(meta, task, phase):
+            if task is None or meta.get("task") == task:
                 skipped.add(meta.get("phase"))
-            continue
-        # A log whose valid metadata names another task or phase is skipped unread (its
-        # table is the costly part); every log that is kept is read and validated whole.
-        known, problems = load_meta(stem.with_suffix(".json"))
-        valid = known is not None and all(p.severity != "error" for p in problems)
-        if valid and not _wanted(known, task, phase):
-            if task is None or known.get("task") == task:
-                skipped.add(known.get("phase"))
-            continue
-        meta, frame = read_trial(stem)
-        if task is not None and meta["task"] != task:
-            continue
-        if phase is not None and meta["phase"] != phase:
-            skipped.add(meta["phase"])
             continue
         demos.append(frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float))
         metas.append(meta)

@@ -103,7 +103,7 @@ import numpy as np
 
 from casa_core.robot.keys import AXIS_KEYS
 from casa_core.study import _operator_kernels as _kernels
-from casa_core.study.path_geometry import row_lengths, unit_tangents
+from casa_core.study.path_geometry import unit_tangents
 
 # Rotation error is compared with position error at this many metres per radian.
 ROT_TO_METRES = 0.1
@@ -191,7 +191,8 @@ class SimulatedParticipant:
         self.tick = tick
         # The path with rotation in metres (ROT_TO_METRES), so that distances mix the two.
         self._scaled = self.reference * _SCALE
-        self._steps = row_lengths(np.diff(self._scaled, axis=0))  # path length of each step
+        # The path length of each step.
+        self._steps = np.linalg.norm(np.diff(self._scaled, axis=0), axis=1)
         self._seen = deque()  # (t, state) not yet perceived
         self._perceived = None
         self._noise = np.zeros(3)

@@ -1,24 +1,8 @@
-"""Lengths and directions along a sampled path, for the simulated operator.
-
-:func:`row_lengths` is ``np.linalg.norm(rows, axis=-1)`` with the same sums (so the same
-bits) without numpy's argument handling, which costs more than the arithmetic on the
-few dozen rows the operator measures every tick.
-"""
+"""Directions along a sampled path, for the simulated operator."""
 
 from __future__ import annotations
 
 import numpy as np
-
-
-def row_lengths(rows: np.ndarray) -> np.ndarray:
-    """``np.linalg.norm(rows, axis=-1)``, the same sums, without its argument handling.
-
-    Examples
-    --------
-    >>> row_lengths(np.array([[3.0, 4.0], [0.0, 0.0]])).tolist()
-    [5.0, 0.0]
-    """
-    return np.sqrt(np.add.reduce(rows * rows, axis=-1))
 
 
 def unit_tangents(path: np.ndarray) -> np.ndarray:
