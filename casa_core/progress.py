@@ -4,13 +4,13 @@ Each job of these targets writes a Snakemake benchmark file (``benchmark:``, a T
 whose ``s`` is the job's wall time) under ``benchmarks/<target>/<unit>/``, a unit being
 one power replicate (``<variant>/r<replicate>``) or one robustness variant. From the
 files present, :func:`read_progress` counts the units and jobs done, the time per unit
-and the time left at the pace so far. Only the benchmarks of the unit's jobs count, so that
-files left by jobs of another workflow version are not taken for its own. A benchmark
-older than its unit's config
-(``data/interim/<target>/<unit>/config.yaml``, rewritten when what the unit's jobs read
-changes) is from an earlier configuration and not counted; one left by a forced rerun
-(``--forcerun``) counts until its job runs again. Measured times stay in these files and
-in the progress log; no table of results contains them.
+and the time left at the pace so far. Only the benchmarks of the unit's jobs count, so
+that files left by jobs of another workflow version are not taken for its own. A
+benchmark older than its unit's config (``data/interim/<target>/<unit>/config.yaml``,
+rewritten when what the unit's jobs read changes) is from an earlier configuration and
+not counted; one left by a forced rerun (``--forcerun``) counts until its job runs
+again. Measured times stay in these files and in the progress log; no table of results
+contains them.
 
 Examples
 --------

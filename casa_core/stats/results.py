@@ -77,9 +77,8 @@ def _cell(text) -> str:
 ROBUSTNESS_NOTE = (
     "data/processed/robustness/results.md, built with the simulated study by the default "
     "target (alone: `snakemake --cores all robustness`), judges the same claims on the "
-    "simulated study under the "
-    "other modelling choices the paper leaves open (inference preset, evidence, operator "
-    "model), with the same participants and seeds."
+    "simulated study under the other modelling choices the paper leaves open (inference "
+    "preset, evidence, operator model), with the same participants and seeds."
 )
 
 
