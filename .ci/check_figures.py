@@ -9,8 +9,10 @@ from pathlib import Path
 import numpy as np
 from matplotlib.image import imread
 
-from casa_core import datasets, figures
+from casa_core import figures
+from casa_core.analysis import datasets
 from casa_core.figures.replay import replay_figure
+from casa_core.io import read_table
 
 PROCESSED, FIGS = Path("data/processed"), Path("figures")
 problems = []
@@ -48,7 +50,7 @@ if ROBUSTNESS:
 
     for ext in ("pdf", "png"):
         check_file(FIGS / f"robustness.{ext}")
-    table = datasets.read_table(PROCESSED / "robustness" / "claims.csv")
+    table = read_table(PROCESSED / "robustness" / "claims.csv")
     if table["variant"].nunique() < 2:
         problems.append("robustness/claims.csv: fewer than 2 variants")
     check_panels("robustness", robustness_figure(table), 1)
@@ -60,7 +62,7 @@ if POWER:
 
     for ext in ("pdf", "png"):
         check_file(FIGS / f"power.{ext}")
-    table = datasets.read_table(PROCESSED / "power" / "power.csv")
+    table = read_table(PROCESSED / "power" / "power.csv")
     if list(table.columns) != POWER_COLUMNS:
         problems.append(f"power/power.csv: columns {list(table.columns)}, expected {POWER_COLUMNS}")
     # A panel per hypothesis (H1-H3) and metric (error, efficiency, relative effort).

@@ -48,6 +48,8 @@ SCHEMA_PATH = Path(__file__).with_name("config.schema.yaml")
 DEFAULT_CONFIG = Path(__file__).resolve().parents[1] / "config" / "config.yaml"
 #: Where ``--config KEY=VALUE`` overrides are said to come from in errors.
 OVERRIDES = "--config"
+#: The variant that overlays nothing: the study's config as it is.
+DEFAULT_VARIANT = "default"
 
 
 class ConfigError(ValueError):
@@ -258,18 +260,67 @@ _BOUNDS = {"minimum": ">=", "maximum": "<=", "exclusiveMinimum": ">", "exclusive
 
 def _consistency(config: dict) -> list[str]:
     """Rules across keys that the schema cannot state."""
-    from casa_core.variants import variant_problems
-
     keys = config["simulation"]["population"]["max_keys"]
     where = "simulation.population.max_keys.p"
     if len(keys["p"]) != len(keys["values"]):
         return [f"{where}: must have as many entries as values ({len(keys['values'])})"]
     if abs(sum(keys["p"]) - 1) > 1e-8:
         return [f"{where}: must sum to 1, got {sum(keys['p'])!r}"]
-    from casa_core.power import power_problems
-
-    # Each modelling variant's overlay, checked against this schema (casa_core/variants.py).
+    # Each modelling variant's overlay, checked against this schema.
     return variant_problems(config) + power_problems(config)
+
+
+def variant_problems(config: Mapping) -> list[str]:
+    """``key: rule`` for every problem of a validated config's ``robustness`` block.
+
+    Each overlay is checked against the config's schema (an unknown preset is named as
+    ``robustness.variants.NAME.inference.preset``); the default variant must exist and
+    overlay nothing; every name in ``robustness.run`` must be a variant.
+
+    Examples
+    --------
+    >>> block = {"variants": {"default": {}, "bad": {"inference": {"preset": "mine"}}}}
+    >>> variant_problems({"robustness": block | {"run": ["default", "other"]}})
+    ... # doctest: +NORMALIZE_WHITESPACE
+    ["robustness.variants.bad.inference.preset: must be one of casa, original, paper,
+      got 'mine'", 'robustness.run: other is not a variant (variants: default, bad)']
+    """
+    block = config.get("robustness") or {}
+    variants = block.get("variants") or {}
+    problems = []
+    for name, overlay in variants.items():
+        where = f"robustness.variants.{name}"
+        problems += [f"{where}.{problem}" for problem in _problems(overlay, partial=True)]
+        if name == DEFAULT_VARIANT and overlay:
+            problems.append(
+                f"{where}: must overlay nothing (it is the config's own settings); "
+                "give a different choice another name"
+            )
+    if DEFAULT_VARIANT not in variants:
+        problems.append(f"robustness.variants: must contain {DEFAULT_VARIANT!r}, the config itself")
+    for name in block.get("run") or []:
+        if name not in variants:
+            known = ", ".join(variants)
+            problems.append(f"robustness.run: {name} is not a variant (variants: {known})")
+    return problems
+
+
+def power_problems(config: Mapping) -> list[str]:
+    """``key: rule`` for every ``power.variants`` name that is not a robustness variant.
+
+    Examples
+    --------
+    >>> power_problems({"power": {"variants": ["x"]}, "robustness": {"variants": {"default": {}}}})
+    ['power.variants: x is not a variant of robustness.variants (variants: default)']
+    """
+    known = (config.get("robustness") or {}).get("variants") or {}
+    names = (config.get("power") or {}).get("variants") or []
+    return [
+        f"power.variants: {name} is not a variant of robustness.variants "
+        f"(variants: {', '.join(known)})"
+        for name in names
+        if name not in known
+    ]
 
 
 def _raise(source: str, problems: list[str]) -> None:

@@ -35,3 +35,13 @@ TICK = 0.05
 COST_PER_METRE = 50 / 0.22
 #: Demonstrations asked for each new intent (the paper's 5).
 DEMONSTRATIONS = 5
+#: How close (m) the last position must be to the intended trajectory's end for success:
+#: 5 cm, the radius of the pouring target drawn in the scene, well inside the bowl's 7 cm
+#: rim (a pour from there lands in the bowl), and far below the 22 cm between the two
+#: nearest ends of different tasks (the green goal and the pouring position), so a
+#: trial that stops at another task's end never succeeds.
+SUCCESS_RADIUS = 0.05
+#: How close (rad) the pour's last rotation must be to the intended tilt (scene
+#: ``pouring.tilt``, 1.8 rad = 103 deg) for success: 0.2 rad keeps the cup past
+#: horizontal (at least 1.6 rad = 92 deg), where it pours out.
+POUR_TILT_TOLERANCE = 0.2

@@ -89,12 +89,12 @@ TASK_CONDITIONS = {
 }
 
 
-#: The assistant's arbitration under each method (casa_core.assistant.Assistant): NA is
+#: The assistant's arbitration under each method (casa_core.assist.assistant.Assistant): NA is
 #: direct teleoperation, PBA distance arbitration with beta = 1, CASA confidence arbitration.
 METHOD_ARBITRATION = {"NA": "none", "PBA": "distance", "CASA": "confidence"}
 #: The name of the intent learned in each unknown task.
 LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
-#: The inference presets (casa_core.presets): this project's, the original
+#: The inference presets (casa_core.assist.presets): this project's, the original
 #: implementation's, the paper's as written.
 PRESET_NAMES = ("casa", "original", "paper")
 #: What the trajectory of inference is: the user's commanded motion or the arm's executed one.

@@ -1,12 +1,16 @@
-"""The package's shape: imports run one way, the vocabulary is defined once, modules stay small.
+"""The package's shape: rooms by job, imports one way, the vocabulary defined once, small modules.
 
 These read the source (``ast``), so they check what the code says, not what one run
-happened to import.
+happened to import. Every import counts, at any depth of a file (an import inside a
+function runs as surely as one at the top), and importing ``a.b.c`` runs the faces
+``a`` and ``a.b`` too: what a module *reaches* is all of that, transitively.
 """
 
 from __future__ import annotations
 
 import ast
+import textwrap
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 import pytest
@@ -18,71 +22,249 @@ MODULES = sorted(PACKAGE.rglob("*.py"))
 #: "About 400 lines": a module past this has more than one job.
 MAX_LINES = 420
 
+#: The rooms, bottom up: each module belongs to the longest prefix that names it. The
+#: package's own face (``casa_core``) holds its version only.
+ROOMS = {
+    "words": ("casa_core", "casa_core.vocabulary", "casa_core.defaults"),
+    "ground": ("casa_core.scene", "casa_core.config"),
+    "model": ("casa_core.model",),
+    "assist": ("casa_core.assist",),
+    "robot": ("casa_core.robot",),
+    "io": ("casa_core.io",),
+    "planning": ("casa_core.planning",),
+    "original": ("casa_core.io.original",),
+    "learning": ("casa_core.learning",),
+    "analysis": ("casa_core.analysis",),
+    "stats": ("casa_core.stats",),
+    "figures": ("casa_core.figures",),
+    "report": ("casa_core.report",),
+    "study": ("casa_core.study",),
+    "experiments": ("casa_core.experiments",),
+    "bench": ("casa_core.bench",),
+    "cli": ("casa_core.cli",),
+}
+#: The rooms each room may import directly (its own always). This is the arrow diagram of
+#: docs/index.md; it is a DAG, so what a room reaches is bounded by what it may import.
+MAY_IMPORT = {
+    "words": set(),
+    "ground": {"words"},
+    "model": set(),
+    "assist": {"words", "ground", "model"},
+    "robot": {"words", "ground", "assist"},
+    "io": {"words", "ground"},
+    "planning": {"words", "ground", "model", "assist", "robot"},
+    "original": {"words", "ground", "io", "robot"},
+    "learning": {"words", "ground", "model", "assist", "planning", "io"},
+    "analysis": {"words", "ground", "model", "assist", "robot", "io", "learning"},
+    "stats": {"words", "ground", "io"},
+    "figures": {"words", "ground", "io", "stats"},
+    "report": {"words", "io"},
+    "study": {"words", "ground", "model", "assist", "robot", "io", "planning", "learning"}
+    | {"analysis"},
+    "experiments": {"words", "ground", "assist"},
+    "bench": {"words", "ground", "assist", "robot", "study", "planning", "learning"},
+    "cli": set(ROOMS) - {"cli"},
+}
+#: What a room must never reach, however indirectly (third-party packages by top name).
+NEVER_REACHES = {
+    "model": {"pybullet", "torch", "pandas", "yaml", "json", "pathlib", "os", "io", "csv"},
+    "assist": {"pybullet", "torch", "casa_core.robot", "casa_core.learning"},
+    "io": {"pybullet", "torch", "casa_core.robot", "casa_core.study", "casa_core.learning"},
+    "planning": {"pybullet", "casa_core.robot.sim", "casa_core.learning", "casa_core.study"},
+    "learning": {"pybullet", "casa_core.robot.sim", "casa_core.study"},
+    "stats": {"pybullet", "torch", "casa_core.robot", "casa_core.study", "casa_core.learning"},
+    "figures": {"pybullet", "torch", "casa_core.robot", "casa_core.study", "casa_core.learning"},
+    "report": {"pybullet", "torch", "matplotlib", "casa_core.study"},
+    "words": {"numpy", "pandas"},
+    "ground": {"pandas", "torch", "pybullet"},
+    "experiments": {"pybullet", "torch", "casa_core.study"},
+}
 
-def module_name(path: Path) -> str:
-    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+
+def module_name(path: Path, root: Path = PACKAGE) -> str:
+    parts = path.relative_to(root.parent).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imported(path: Path) -> set[str]:
-    """Every module ``path`` imports, at any depth of the file (lazy imports included)."""
-    names = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.Import):
-            names |= {alias.name for alias in node.names}
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            names.add(node.module)
-            names |= {f"{node.module}.{alias.name}" for alias in node.names}
-    return names
+def parents(name: str) -> list[str]:
+    """The packages whose faces run when ``name`` is imported: ``a.b.c`` -> ``a``, ``a.b``."""
+    parts = name.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts))]
 
 
-def in_layer(name: str, layer: str) -> bool:
-    return name == layer or name.startswith(layer + ".")
+def import_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
+    """Module -> the modules it imports anywhere in its file (lazy imports included).
+
+    ``from pkg import name`` is an import of ``pkg.name`` where that is a module, else of
+    ``pkg``; a third-party import is its top-level name (``torch``).
+    """
+    paths = sorted(root.rglob("*.py"))
+    known = {module_name(p, root) for p in paths}
+    top = root.name
+    graph = {}
+    for path in paths:
+        this = module_name(path, root)
+        found = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                names = [
+                    f"{node.module}.{alias.name}"
+                    if f"{node.module}.{alias.name}" in known
+                    else node.module
+                    for alias in node.names
+                ]
+            else:
+                continue
+            for name in names:
+                found.add(name if name.split(".")[0] == top else name.split(".")[0])
+        graph[this] = found - {this}
+    return graph
 
 
-def modules_of(*layers: str) -> list[Path]:
-    return [p for p in MODULES if any(in_layer(module_name(p), layer) for layer in layers)]
+def reach(graph: Mapping[str, set[str]], start: str) -> set[str]:
+    """Everything importing ``start`` runs: its imports, their faces, transitively."""
+    seen: set[str] = set()
+    todo = [start]
+    while todo:
+        for name in graph.get(todo.pop(), ()):
+            for step in [*parents(name), name]:
+                if step not in seen and step != start:
+                    seen.add(step)
+                    todo.append(step)
+    return seen
 
 
-EQUATIONS = ("casa_core.confidence", "casa_core.inference", "casa_core.arbitration")
-# (layer, what it must not import): the arrows of docs/index.md.
-FORBIDDEN = [
-    (EQUATIONS + ("casa_core._checks",), ("casa_core.intents", "casa_core.assistant")),
-    (EQUATIONS + ("casa_core._checks",), ("pybullet", "torch", "pandas", "yaml", "json")),
-    (EQUATIONS + ("casa_core._checks",), ("pathlib", "os", "io", "csv")),
-    (("casa_core.intents", "casa_core.assistant"), ("casa_core.planning", "casa_core.learning")),
-    (("casa_core.intents", "casa_core.assistant"), ("casa_core.study", "casa_core.robot")),
-    (("casa_core.planning",), ("casa_core.learning", "casa_core.study", "casa_core.library")),
-    (("casa_core.learning",), ("casa_core.study", "casa_core.skills", "casa_core.library")),
-    (("casa_core.learning",), ("casa_core.io", "casa_core.robot", "pybullet")),
-    (("casa_core.library",), ("casa_core.study", "casa_core.robot", "casa_core.io.trial_log")),
-    (("casa_core.io",), ("casa_core.study", "casa_core.robot", "casa_core.learning")),
-    (("casa_core.robot",), ("casa_core.learning", "casa_core.library", "casa_core.study")),
-    (("casa_core.stats", "casa_core.figures"), ("casa_core.robot", "casa_core.study")),
-    (("casa_core.stats", "casa_core.figures"), ("casa_core.learning", "casa_core.library")),
-    (("casa_core.stats", "casa_core.figures"), ("pybullet", "torch", "casa_core.skills")),
-    (("casa_core.vocabulary", "casa_core.defaults"), ("casa_core", "numpy", "pandas")),
-    # Replay redoes inference over logs: no simulator, no study, no drawing.
-    (("casa_core.replay",), ("casa_core.study", "casa_core.robot.sim", "pybullet")),
-    (("casa_core.replay",), ("casa_core.figures", "casa_core.cli", "casa_core.planning")),
-]
+def cycles(graph: Mapping[str, set[str]]) -> list[list[str]]:
+    """Every group of modules that import each other, directly or through others (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if nxt not in graph:
+                continue
+            if nxt not in index:
+                visit(nxt)
+                low[node] = min(low[node], low[nxt])
+            elif nxt in stack:
+                low[node] = min(low[node], index[nxt])
+        if low[node] == index[node]:
+            group = []
+            while True:
+                member = stack.pop()
+                group.append(member)
+                if member == node:
+                    break
+            if len(group) > 1:
+                found.append(sorted(group))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return found
 
 
-@pytest.mark.parametrize(("layers", "forbidden"), FORBIDDEN, ids=lambda v: ",".join(v))
-def test_imports_run_one_way(layers, forbidden):
-    broken = [
-        f"{module_name(path)} imports {name}"
-        for path in modules_of(*layers)
-        for name in sorted(imported(path))
-        if any(in_layer(name, f) for f in forbidden)
-    ]
+def room_of(name: str, rooms: Mapping[str, Iterable[str]] = ROOMS) -> str | None:
+    best = None, -1
+    for room, prefixes in rooms.items():
+        for prefix in prefixes:
+            if (name == prefix or name.startswith(prefix + ".")) and len(prefix) > best[1]:
+                best = room, len(prefix)
+    return best[0]
+
+
+def upward_imports(graph, rooms=ROOMS, may_import=MAY_IMPORT) -> list[str]:
+    """``module imports name (room -> room)`` for every import the arrows do not allow."""
+    broken = []
+    for module, names in sorted(graph.items()):
+        here = room_of(module, rooms)
+        for name in sorted(names):
+            there = room_of(name, rooms)
+            if there is not None and there != here and there not in may_import[here]:
+                broken.append(f"{module} imports {name} ({here} -> {there})")
+    return broken
+
+
+def forbidden_reach(graph, never=NEVER_REACHES, rooms=ROOMS) -> list[str]:
+    """``module reaches name`` for everything a room must never reach, however indirectly."""
+    broken = []
+    for module in sorted(graph):
+        banned = never.get(room_of(module, rooms), set())
+        for name in sorted(reach(graph, module)):
+            if any(name == b or name.startswith(b + ".") for b in banned):
+                broken.append(f"{module} reaches {name}")
+    return broken
+
+
+GRAPH = import_graph()
+
+
+def test_every_module_is_in_a_room_and_every_room_has_modules():
+    homeless = [m for m in GRAPH if room_of(m) is None]
+    assert not homeless, f"modules in no room: {homeless}"
+    empty = [room for room in ROOMS if not any(room_of(m) == room for m in GRAPH)]
+    assert not empty, f"rooms with no module (renamed?): {empty}"
+    assert set(MAY_IMPORT) == set(ROOMS) and set(NEVER_REACHES) <= set(ROOMS)
+
+
+def test_the_arrows_form_no_cycle():
+    # A room that may import another that may import it back would make the rules vacuous.
+    assert not cycles({room: set(rooms) for room, rooms in MAY_IMPORT.items()})
+
+
+def test_no_module_imports_a_room_above_its_own():
+    broken = upward_imports(GRAPH)
     assert not broken, "\n".join(broken)
 
 
-def test_every_layer_named_above_exists():
-    # A renamed package would make the rules above pass vacuously.
-    for layers, _ in FORBIDDEN:
-        assert modules_of(*layers), f"no module in {layers}"
+def test_no_modules_import_each_other():
+    found = cycles(GRAPH)
+    assert not found, "\n".join(" <-> ".join(group) for group in found)
+
+
+def test_no_room_reaches_what_it_must_not():
+    broken = forbidden_reach(GRAPH)
+    assert not broken, "\n".join(broken)
+
+
+def test_config_reaches_the_words_only():
+    above = {m for m in reach(GRAPH, "casa_core.config") if m.startswith("casa_core")}
+    assert above <= {"casa_core", "casa_core.vocabulary", "casa_core.defaults"}, above
+
+
+PLANTED = {
+    # low imports high inside a function: a hidden cycle, and an upward reach.
+    "pkg/__init__.py": "",
+    "pkg/low.py": "def f():\n    from pkg.high import g\n    return g\n",
+    "pkg/high.py": "from pkg import low\n\ndef g():\n    return low\n",
+    # mid is allowed to import low only, but reaches heavy through the face of pkg.sub.
+    "pkg/mid.py": "import pkg.sub.light\n",
+    "pkg/sub/__init__.py": "from pkg.sub import heavy\n",
+    "pkg/sub/light.py": "",
+    "pkg/sub/heavy.py": "import torch\n",
+}
+
+
+def test_the_checks_fail_on_a_planted_cycle_and_reach(tmp_path):
+    for name, text in PLANTED.items():
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text(textwrap.dedent(text))
+    graph = import_graph(tmp_path / "pkg")
+    assert cycles(graph) == [["pkg.high", "pkg.low"]]
+    rooms = {"low": ("pkg", "pkg.low"), "high": ("pkg.high",), "mid": ("pkg.mid",)}
+    rooms |= {"sub": ("pkg.sub",)}
+    may = {"low": set(), "high": {"low"}, "mid": {"low", "sub"}, "sub": {"low"}}
+    assert upward_imports(graph, rooms, may) == ["pkg.low imports pkg.high (low -> high)"]
+    reached = forbidden_reach(graph, {"mid": {"torch"}}, rooms)
+    assert reached == ["pkg.mid reaches torch"]
+    # Without the faces' imports the reach would go unseen.
+    assert "pkg.sub.heavy" in reach(graph, "pkg.mid")
 
 
 def test_modules_are_small():
@@ -156,14 +338,15 @@ def test_code_cites_the_repository_docs_only():
         assert (root / page).is_file(), f"{page} is cited but missing"
 
 
-#: Modules whose every public function shows its use in a docstring example that runs.
-EXAMPLED = [*EQUATIONS, "casa_core._checks", "casa_core.tables", "casa_core.vocabulary"]
-EXAMPLED += ["casa_core.io", "casa_core.stats"]
+#: Rooms whose every public function shows its use in a docstring example that runs.
+EXAMPLED = ["casa_core.model", "casa_core.vocabulary", "casa_core.io", "casa_core.stats"]
 
 
 def test_public_functions_have_examples():
     lacking = []
-    for path in modules_of(*EXAMPLED):
+    for path in MODULES:
+        if room_of(module_name(path), {"exampled": EXAMPLED}) is None:
+            continue
         if path.name.startswith("_") and path.name != "__init__.py":
             continue  # private modules: their callers' examples exercise them
         for node in ast.parse(path.read_text(encoding="utf-8")).body:
@@ -171,3 +354,14 @@ def test_public_functions_have_examples():
             if public and ">>>" not in (ast.get_docstring(node) or ""):
                 lacking.append(f"{module_name(path)}.{node.name}")
     assert not lacking, f"public functions without a docstring example: {lacking}"
+
+
+@pytest.mark.parametrize("face", sorted({room_of(m) for m in GRAPH} - {"words", "ground"}))
+def test_each_room_has_a_face_that_says_its_modules(face):
+    # The face's docstring names each public module of its package.
+    for prefix in ROOMS[face]:
+        init = PACKAGE.parent / prefix.replace(".", "/") / "__init__.py"
+        doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
+        modules = sorted(p.stem for p in init.parent.glob("*.py") if not p.name.startswith("_"))
+        missing = [m for m in modules if f"{prefix}.{m}" not in doc and f".{m}`" not in doc]
+        assert not missing, f"{prefix}'s docstring does not name {missing}"

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from casa_core import bench, bench_protocol
+from casa_core.bench import protocol as bench_protocol
+from casa_core.bench import suite as bench
 from casa_core.scene import load_scene
 
 

@@ -15,7 +15,8 @@ import pytest
 from test_logs_synthetic import SCENE, write_dataset
 from test_workflow import copy_workflow, snakemake
 
-from casa_core import datasets, figures, stats
+from casa_core import figures, stats
+from casa_core.analysis import datasets
 from casa_core.cli import main
 from casa_core.io.atomic import write_csv
 from casa_core.stats import STATS_COLUMNS, claims

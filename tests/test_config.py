@@ -12,7 +12,8 @@ import yaml
 from test_logs_synthetic import ROOT, write_dataset
 from test_workflow import ENV, copy_workflow, snakemake
 
-from casa_core import assistant, defaults, presets
+from casa_core import defaults
+from casa_core.assist import assistant, presets
 from casa_core.config import (
     DEFAULT_CONFIG,
     SCHEMA_PATH,

@@ -9,8 +9,9 @@ import pandas as pd
 import pytest
 from test_logs_synthetic import SCENE, write_dataset
 
-from casa_core import datasets, metrics, tasks
-from casa_core.io import check_meta, find_files, read_trial
+from casa_core.analysis import datasets, metrics
+from casa_core.assist import tasks
+from casa_core.io import check_meta, find_files, read_table, read_trial
 
 # The column contract with users (docs/data-contracts.md); extra columns may follow.
 TRIALS = [
@@ -151,7 +152,7 @@ def test_trials_end_with_timed_out_and_success(raw, tmp_path):
     datasets.process_dataset(raw, tmp_path, SCENE)
     header = (tmp_path / "trials.csv").read_text().splitlines()[0].split(",")
     assert header[-2:] == ["timed_out", "success"]
-    trials = datasets.read_table(tmp_path / "trials.csv")
+    trials = read_table(tmp_path / "trials.csv")
     assert trials["timed_out"].isna().all()  # no log says its limit
     # Each row's success is task_success of its log against its task's intended end.
     for row in trials.itertuples():
@@ -174,7 +175,7 @@ def test_timed_out_comes_from_the_logged_limit(tmp_path):
         meta = json.loads(path.read_text())
         path.write_text(json.dumps({**meta, "max_duration": frame["t"].iloc[-1] + extra}))
     datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE)
-    trials = datasets.read_table(tmp_path / "out" / "trials.csv").set_index("method")
+    trials = read_table(tmp_path / "out" / "trials.csv").set_index("method")
     assert trials.loc["NA", "timed_out"] is True and trials.loc["PBA", "timed_out"] is False
     assert pd.isna(trials.loc["CASA", "timed_out"])
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from casa_core._checks import require_positive
-from casa_core.arbitration import (
+from casa_core.model._checks import require_positive
+from casa_core.model.arbitration import (
     _alpha_belief,
     _alpha_confidence,
     _alpha_distance,
@@ -19,8 +19,8 @@ from casa_core.arbitration import (
     alpha_distance,
     blend,
 )
-from casa_core.confidence import _suboptimality, beta_hat, suboptimality
-from casa_core.inference import log_likelihood, posterior
+from casa_core.model.confidence import _suboptimality, beta_hat, suboptimality
+from casa_core.model.inference import log_likelihood, posterior
 
 
 def test_suboptimality_is_prefix_plus_to_go_minus_optimal():

@@ -4,7 +4,7 @@ The controller's joint velocities (``casa_core.robot.control_kernel``, numba) ar
 to the same formula in plain numpy on pybullet's own Jacobian, over configurations
 across the joint ranges (near limits too), lags beyond ``max_lag`` and commands fast
 enough to hit the joint speed limits. The pouring cost's hand-written gradient
-(``casa_core.skills.PouringCost``) is held to torch's autograd of
+(``casa_core.planning.pouring.PouringCost``) is held to torch's autograd of
 ``PouringIntent.state_cost``, at random states and where its roundings act (at the
 target, the cup upright, the cup at the pouring tilt). A trial CSV checked on whole
 arrays (``casa_core.io.validation``) gives the table and the problems the cell-by-cell
@@ -21,16 +21,16 @@ import pybullet as p
 import pytest
 import torch
 
-from casa_core import arbitration
 from casa_core.io import validation
 from casa_core.io._cells import read_csv_cells
 from casa_core.io.atomic import frame_to_csv_text
+from casa_core.model import arbitration
 from casa_core.planning import optimize
+from casa_core.planning.pouring import PouringIntent
 from casa_core.robot import kinematics as kin
 from casa_core.robot.control_kernel import joint_velocities, joint_velocities_numpy, read_pose
 from casa_core.robot.sim import TOOL_LINK, ArmSimulation
 from casa_core.scene import load_scene
-from casa_core.skills import PouringIntent
 
 
 @pytest.fixture(scope="module")

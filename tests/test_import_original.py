@@ -19,8 +19,8 @@ import yaml
 
 from casa_core.cli import main
 from casa_core.io import read_trial
-from casa_core.original_import import ORIGINAL_SCENE
-from casa_core.original_sessions import REFERENCE_ANGLES, reference_q
+from casa_core.io.original.importer import ORIGINAL_SCENE
+from casa_core.io.original.sessions import REFERENCE_ANGLES, reference_q
 from casa_core.robot import kinematics as kin
 from casa_core.scene import load_scene
 

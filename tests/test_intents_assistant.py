@@ -6,8 +6,8 @@ Closed forms are derived in the GoalIntent docstring; each test states the arith
 import numpy as np
 import pytest
 
-from casa_core.assistant import Assistant
-from casa_core.intents import GoalIntent
+from casa_core.assist.assistant import Assistant
+from casa_core.assist.intents import GoalIntent
 
 START = np.array([0.0, 0.0, 0.0, 0.0])
 GOAL = np.array([0.3, 0.4, 0.0])  # 0.5 m from START
@@ -200,7 +200,7 @@ def test_goal_intent_refuses_a_negative_speed():
 
 def test_belief_arbitration_with_one_intent_leaves_the_user_in_control():
     # A single intent has belief 1 by construction (no alternative): alpha = 1, as
-    # casa_core.arbitration.alpha_belief documents, not the robot's full control.
+    # casa_core.model.arbitration.alpha_belief documents, not the robot's full control.
     def one_intent(arbitration):
         assistant = Assistant([GoalIntent("green", GOAL)], arbitration=arbitration)
         assistant.reset(START)

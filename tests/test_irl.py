@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import torch
 
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.learning import (
     IRLConfig,
     MaxEntIRL,
@@ -16,10 +17,9 @@ from casa_core.learning import (
     feature_names,
     state_features,
 )
+from casa_core.planning.pouring import PouringIntent
 from casa_core.scene import load_scene
-from casa_core.skills import PouringIntent
 from casa_core.study.learning_evidence import learning_evidence, scene_objects
-from casa_core.tasks import intended_trajectory
 
 SCENE = load_scene()
 OBJECTS = scene_objects(SCENE)
@@ -285,7 +285,7 @@ def test_a_cost_whose_own_optimum_misses_the_demonstrations_is_not_kept():
     # costs are therefore checked by planning them as assistance will. Here the
     # iteration whose D^phi matched best (1) has a cost whose optimum goes to the
     # wrong place, and the next one (2) reaches the demonstrations' end.
-    from casa_core.intents import GoalIntent
+    from casa_core.assist.intents import GoalIntent
     from casa_core.learning.maxent import _verified_choice
     from casa_core.planning import PlannerConfig
 

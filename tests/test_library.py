@@ -1,4 +1,4 @@
-"""The intent library (casa_core.library) and the `casa learn` / `casa library list` commands."""
+"""The intent library (casa_core.learning.library), `casa learn` and `casa library list`."""
 
 from __future__ import annotations
 
@@ -13,9 +13,8 @@ import pandas as pd
 import pytest
 import torch
 
-from casa_core import library
 from casa_core.io import write_trial
-from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
+from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names, library
 from casa_core.scene import load_scene
 from casa_core.study.learn_from_logs import read_demonstrations
 from casa_core.study.learning_evidence import scene_objects

@@ -517,7 +517,7 @@ def test_symlinks_out_of_the_dataset_are_refused_and_never_read(tmp_path, monkey
 
 
 def test_warnings_keep_the_file_and_are_listed_in_validation_csv(tmp_path):
-    from casa_core import datasets
+    from casa_core.analysis import datasets
     from casa_core.scene import load_scene
 
     stems = write_dataset(tmp_path / "ds", participants=("p01",), surveys=False)

@@ -7,8 +7,9 @@ import json
 import pandas as pd
 from test_logs_synthetic import write_dataset
 
-from casa_core import datasets
+from casa_core.analysis import datasets
 from casa_core.cli import main
+from casa_core.io import read_table
 from casa_core.scene import DEFAULT_SCENE
 
 
@@ -52,11 +53,11 @@ def test_report_and_allow_invalid(tmp_path, capsys):
     csv_path.write_text(csv_path.read_text().replace(",", ";", 1))
     report = tmp_path / "out" / "validation.csv"
     assert main(["validate", str(tmp_path / "ds"), "--report", str(report)]) == 1
-    table = datasets.read_table(report)
+    table = read_table(report)
     assert table.columns.tolist() == list(datasets.VALIDATION_COLUMNS)
     assert (table["status"] == "invalid").sum() >= 1 and (table["status"] == "ok").sum() == 10
     assert main(["validate", str(tmp_path / "ds"), "--report", str(report), "--allow-invalid"]) == 0
-    table = datasets.read_table(report)
+    table = read_table(report)
     bad = table[table["status"] == "excluded"]
     assert set(bad["file"]) == {csv_path.relative_to(tmp_path / "ds").as_posix()}
     assert "excluded" in capsys.readouterr().err
@@ -67,14 +68,14 @@ def test_process_command_writes_the_tables(tmp_path, capsys):
     scene = str(DEFAULT_SCENE)
     out = tmp_path / "processed"
     assert main(["process", str(tmp_path / "ds"), "--out", str(out), "--scene", scene]) == 0
-    trials = datasets.read_table(out / "trials.csv")
+    trials = read_table(out / "trials.csv")
     # "NA" stays a method, not a missing value.
     assert sorted(trials["method"].unique()) == ["CASA", "NA", "PBA"]
     assert "11 trial(s)" in capsys.readouterr().out
     (tmp_path / "ds" / "p01" / "known_goal_NA_no_misspecification.json").write_text("[]")
     assert main(["process", str(tmp_path / "ds"), "--out", str(out), "--scene", scene]) == 1
     assert "[json-object]" in capsys.readouterr().err
-    pd.testing.assert_frame_equal(datasets.read_table(out / "trials.csv"), trials)  # untouched
+    pd.testing.assert_frame_equal(read_table(out / "trials.csv"), trials)  # untouched
 
 
 def test_process_names_the_bad_scene_key_without_a_traceback(tmp_path, capsys):
@@ -131,7 +132,7 @@ def test_warnings_are_printed_and_exit_0(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"{csv_path}: column 't', line {len(table) // 2 + 2}: warning [tick-irregular]" in err
     assert "1 file(s) checked, 0 invalid, 1 problem(s) (1 warning(s))" in err
-    rows = datasets.read_table(report)
+    rows = read_table(report)
     assert rows[["status", "rule"]].values.tolist() == [["warning", "tick-irregular"]]
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from casa_core import tasks
+from casa_core.assist import tasks
 from casa_core.io import SURVEY_COLUMNS, read_trial, validate_paths, write_surveys, write_trial
 from casa_core.scene import load_scene
 from casa_core.vocabulary import QUESTIONS

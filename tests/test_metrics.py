@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 from test_logs_synthetic import SCENE, keys_of_motion
 
-from casa_core import metrics, tasks
+from casa_core.analysis import metrics
+from casa_core.assist import tasks
 
 DT = 0.05
 # Intended: 0.05 m along x in 1 s (20 ticks), then holding there.

@@ -8,7 +8,8 @@ differs, and with the study's time limit.
 import numpy as np
 import pytest
 
-from casa_core import metrics
+from casa_core.analysis import metrics
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.config import load_config
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import load_scene
@@ -20,7 +21,6 @@ from casa_core.study.participants import (
     SimulatedParticipant,
     make_participant,
 )
-from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import TASKS
 
 SIMULATION = load_config("config/config.yaml")["simulation"]

@@ -15,11 +15,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.robot.keys import AXIS_KEYS
 from casa_core.scene import load_scene
 from casa_core.study import _operator_kernels as kernels
 from casa_core.study import participants as part
-from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import TASKS
 
 PARAMS = part.ParticipantParams(0.35, 0.01, 0.015, 0.3, 0.8, 0.2, 2)

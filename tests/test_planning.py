@@ -9,7 +9,7 @@ one feasible step apart (per axis: ``clip(g - x0, -i s, i s)`` changes by at
 most s per axis; in a ball they lie on the segment to g, s apart). So the
 optimum is ``x_i = x0 + clip(g - x0, -i s, i s)`` (per axis) and ``x_i = x0 +
 min(i s, d) (g - x0) / d`` (norm), the latter being GoalIntent's
-``distance_sum`` optimum (casa_core.intents).
+``distance_sum`` optimum (casa_core.assist.intents).
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 import torch
 
+from casa_core.assist.intents import GoalIntent
 from casa_core.defaults import COST_PER_METRE
-from casa_core.intents import GoalIntent
 from casa_core.planning import (
     PlannedIntent,
     PlannerConfig,

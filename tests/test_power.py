@@ -18,10 +18,11 @@ from scipy.stats import norm
 from test_robustness import CI, CONFIG, _overlay, dry_run
 from test_workflow import snakemake
 
-from casa_core import datasets, power, progress
 from casa_core.cli import main
 from casa_core.config import ConfigError, load_config
+from casa_core.experiments import power, progress
 from casa_core.figures.power import power_figure
+from casa_core.io import read_table
 from casa_core.io.atomic import write_csv
 from casa_core.stats.margins import Margins
 from casa_core.stats.power import (
@@ -215,7 +216,7 @@ def test_the_commands_write_the_same_bytes_whatever_the_order(tmp_path):
         assert main(["power", "table", "--detections", *order, "--out", str(tmp_path / name)]) == 0
     first = (tmp_path / "a.csv").read_bytes()
     assert first == (tmp_path / "b.csv").read_bytes()
-    table = datasets.read_table(tmp_path / "a.csv")
+    table = read_table(tmp_path / "a.csv")
     # 2 Ns x 3 hypotheses x 3 metrics x 2 forms, each from 2 replicates.
     assert len(table) == 36 and set(table["replicates"]) == {2}
     assert main(["power", "figure", "--power", str(tmp_path / "a.csv"), "--out",

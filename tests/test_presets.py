@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from scipy.special import softmax
 
-from casa_core.assistant import Assistant
-from casa_core.intents import GoalIntent
-from casa_core.presets import PRESETS, preset
+from casa_core.assist.assistant import Assistant
+from casa_core.assist.intents import GoalIntent
+from casa_core.assist.presets import PRESETS, preset
 from casa_core.robot import kinematics as kin
 from casa_core.vocabulary import PRESET_NAMES
 

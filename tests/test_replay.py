@@ -13,10 +13,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from casa_core.analysis.replay import COLUMNS, replay_differences, replay_trial
 from casa_core.cli import main
 from casa_core.cli.replay import SUMMARY_COLUMNS
 from casa_core.io import read_trial
-from casa_core.replay import COLUMNS, replay_differences, replay_trial
 from casa_core.scene import load_scene
 
 SCENE = load_scene()

@@ -18,8 +18,8 @@ import pytest
 from test_logs_synthetic import write_dataset
 from test_workflow import copy_workflow, snakemake
 
-from casa_core import datasets
 from casa_core.cli import main
+from casa_core.io import read_table
 from casa_core.io.atomic import write_csv
 from casa_core.stats import STATS_COLUMNS, apa
 
@@ -74,7 +74,7 @@ def page(report) -> str:
 
 @needs_chromium
 def test_the_landing_page_opens_on_results_then_figures_stats_tables_workflow(report, page):
-    stats = datasets.read_table(report / "data" / "processed" / "pilot" / "stats.csv")
+    stats = read_table(report / "data" / "processed" / "pilot" / "stats.csv")
     h1 = stats[(stats["hypothesis"] == "H1") & (stats["metric"] == "error")]
     anova = apa.result(h1[h1["analysis"] == "anova"].iloc[0])
     within = apa.result(h1[h1["analysis"] == "rm_anova"].iloc[0])

@@ -120,7 +120,7 @@ def test_the_robot_imports_nothing_of_learning_or_the_study():
         "import sys, casa_core.robot.keys, casa_core.robot.kinematics, casa_core.robot.scene, "
         "casa_core.robot.sim, casa_core.robot.teleop\n"
         "print(' '.join(m for m in sys.modules if m.startswith(('casa_core.irl', "
-        "'casa_core.library', 'casa_core.learning', 'casa_core.study', 'torch'))))"
+        "'casa_core.learning.library', 'casa_core.learning', 'casa_core.study', 'torch'))))"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert run.returncode == 0, run.stderr

@@ -15,8 +15,10 @@ import yaml
 from test_logs_synthetic import ROOT
 from test_workflow import copy_workflow, snakemake
 
-from casa_core import cli, progress, variants
+from casa_core import cli
 from casa_core.config import ConfigError, load_config
+from casa_core.experiments import progress
+from casa_core.experiments import robustness as variants
 from casa_core.figures.robustness import VERDICT_COLOURS, robustness_figure, verdict_grid
 from casa_core.stats import STATS_COLUMNS
 from casa_core.stats.claims import VERDICTS

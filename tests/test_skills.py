@@ -1,4 +1,4 @@
-"""The pouring intent and the cup's orientation (casa_core.skills, casa_core.rotation)."""
+"""The pouring intent and the cup's orientation (casa_core.planning.pouring and .rotation)."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import torch
 
+from casa_core.planning.pouring import PouringIntent, cup_axis, cup_tilt_deg, cup_upright
+from casa_core.planning.rotation import end_effector_rotation
 from casa_core.robot.kinematics import ee_rotation
-from casa_core.rotation import end_effector_rotation
 from casa_core.scene import load_scene
-from casa_core.skills import PouringIntent, cup_axis, cup_tilt_deg, cup_upright
 
 SCENE = load_scene()
 

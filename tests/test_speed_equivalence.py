@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import torch
 
-from casa_core.intents import length
+from casa_core.assist.intents import length
 from casa_core.learning import NeuralIntent, cost_network, feature_names
 from casa_core.learning.adam import Adam
 from casa_core.learning.features import bounded_cost, cost_logits
@@ -104,7 +104,7 @@ def test_numpy_cost_results_outlive_its_work_arrays():
 
 
 def test_a_copied_numpy_cost_computes_what_the_original_does():
-    # The assistant is deep-copied (casa_core.bench), pickling is how a cost leaves a
+    # The assistant is deep-copied (casa_core.bench.suite), pickling is how a cost leaves a
     # process: each copy must compute with its own work arrays.
     fast = NumpyStateCost(network(), objects=POSITIONS, length_scale=0.1, cost_scale=10.0)
     rng = np.random.default_rng(8)

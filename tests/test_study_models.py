@@ -4,14 +4,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from casa_core.assistant import Assistant
-from casa_core.intents import GoalIntent
+from casa_core.assist.assistant import Assistant
+from casa_core.assist.intents import GoalIntent
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.robot.keys import keys_to_action
 from casa_core.scene import load_scene
 from casa_core.study import likert, protocol
 from casa_core.study.arbitration_comparison import compare_arbitrations
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
-from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import QUESTIONS
 
 SCENE = load_scene()

@@ -9,9 +9,9 @@ import textwrap
 import pybullet as p
 import pytest
 
+from casa_core.assist.presets import preset
 from casa_core.cli import build_parser, main
 from casa_core.io import read_trial, validate_paths
-from casa_core.presets import preset
 from casa_core.robot import teleop
 from casa_core.scene import load_scene
 from casa_core.study.key_sources import ScriptedKeys
@@ -196,9 +196,9 @@ def test_teleop_in_a_real_window_under_xvfb(tmp_path):
 
 
 def test_learned_intent_files_join_the_known_goals_after_learning(scene, tmp_path):
-    from casa_core.bench import untrained_neural_intent
+    from casa_core.bench.suite import untrained_neural_intent
     from casa_core.learning import IRLConfig
-    from casa_core.library import save_intent
+    from casa_core.learning.library import save_intent
     from casa_core.planning import PlannerConfig
     from casa_core.study.closed_loop import trial_intents
 
@@ -245,9 +245,9 @@ def test_misspecification_in_teleop_asks_for_and_records_demonstrations(
     # records them. In an Unknown Goal trial the expert drives to
     # the end of `driven_to`: to red, which no known intent explains, or to green,
     # which one does.
+    from casa_core.assist.tasks import task_waypoints
     from casa_core.study.key_sources import WaypointKeys
     from casa_core.study.teleop_session import teleop_session
-    from casa_core.tasks import task_waypoints
 
     stems, found = teleop_session(
         scene,

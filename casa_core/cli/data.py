@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from casa_core.cli._options import example
+from casa_core.io import read_table
 
 
 def register(commands) -> None:
@@ -35,7 +36,7 @@ def _add_validate(commands) -> None:
 
 
 def _validate(args) -> int:
-    from casa_core import datasets
+    from casa_core.analysis import datasets
     from casa_core.io import check_paths
 
     if args.report:
@@ -97,7 +98,7 @@ def _add_process(commands) -> None:
 
 
 def _process(args) -> int:
-    from casa_core import datasets
+    from casa_core.analysis import datasets
     from casa_core.scene import SceneError, load_scene
 
     try:
@@ -159,7 +160,7 @@ def _add_stats(commands) -> None:
 
 
 def _stats(args) -> int:
-    from casa_core import datasets, stats
+    from casa_core import stats
     from casa_core.io.atomic import atomic_paths, frame_to_csv_text
     from casa_core.stats.margins import Margins, parse_margin
 
@@ -175,8 +176,8 @@ def _stats(args) -> int:
         return 2
     try:
         # read_table keeps the method "NA" as text (pandas' default would make it missing).
-        trials = datasets.read_table(args.trials)
-        likert = datasets.read_table(args.likert) if args.likert else None
+        trials = read_table(args.trials)
+        likert = read_table(args.likert) if args.likert else None
         table = stats.analyze_study(trials, likert, margins=margins)
         report = stats.report_markdown(table, trials=trials)
     except (OSError, ValueError) as error:
@@ -231,8 +232,8 @@ def _add_import(commands) -> None:
 
 
 def _import_original(args) -> int:
-    from casa_core.original_import import describe, import_original
-    from casa_core.original_sessions import SessionError
+    from casa_core.io.original.importer import describe, import_original
+    from casa_core.io.original.sessions import SessionError
 
     try:
         result = import_original(

@@ -106,7 +106,7 @@ def _add_library(commands) -> None:
 def _library_list(args) -> int:
     from pathlib import Path
 
-    from casa_core import library
+    from casa_core.learning import library
 
     root = Path(args.library)
     if not root.is_dir():

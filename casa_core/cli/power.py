@@ -10,6 +10,7 @@ from __future__ import annotations
 import sys
 
 from casa_core.cli._options import example, positive_int
+from casa_core.io import read_table
 
 _EXAMPLES = {
     "detect": (
@@ -66,7 +67,7 @@ def register(commands) -> None:
 
 
 def _add_progress(commands) -> None:
-    from casa_core.progress import BENCHMARKS, UNIT_WORDS
+    from casa_core.experiments.progress import BENCHMARKS, UNIT_WORDS
 
     command = commands.add_parser(
         "progress",
@@ -102,7 +103,6 @@ def _fail(step: str, error: Exception) -> int:
 
 
 def _detect(args) -> int:
-    from casa_core import datasets
     from casa_core.config import load_config
     from casa_core.io.atomic import write_csv
     from casa_core.stats.margins import Margins
@@ -110,7 +110,7 @@ def _detect(args) -> int:
 
     config = load_config(args.config)
     try:
-        trials = datasets.read_table(args.trials)
+        trials = read_table(args.trials)
         rows = replicate_detections(
             trials,
             sizes=args.sizes,
@@ -126,12 +126,11 @@ def _detect(args) -> int:
 
 
 def _table(args) -> int:
-    from casa_core import datasets
     from casa_core.io.atomic import write_csv
     from casa_core.stats.power import power_table
 
     try:
-        table = power_table([datasets.read_table(path) for path in sorted(args.detections)])
+        table = power_table([read_table(path) for path in sorted(args.detections)])
     except (OSError, ValueError) as error:
         return _fail("table", error)
     write_csv(args.out, table)
@@ -141,12 +140,11 @@ def _table(args) -> int:
 
 
 def _figure(args) -> int:
-    from casa_core import datasets
     from casa_core.figures.power import power_figure
     from casa_core.figures.style import save_figure
 
     try:
-        fig = power_figure(datasets.read_table(args.power))
+        fig = power_figure(read_table(args.power))
     except (OSError, ValueError) as error:
         return _fail("figure", error)
     written = ", ".join(map(str, save_figure(fig, args.out)))
@@ -159,8 +157,8 @@ def _progress(args) -> int:
     from pathlib import Path
 
     from casa_core.config import load_config
+    from casa_core.experiments.progress import read_progress, target_units, unit_configs
     from casa_core.io.atomic import atomic_write_text
-    from casa_core.progress import read_progress, target_units, unit_configs
 
     config = load_config(*args.config)
     units = target_units(config, args.target)

@@ -1,4 +1,4 @@
-"""``casa replay``: offline inference over recorded trial logs (:mod:`casa_core.replay`)."""
+"""``casa replay``: inference over trial logs (:mod:`casa_core.analysis.replay`)."""
 
 from __future__ import annotations
 
@@ -91,7 +91,7 @@ def _fail(message: str) -> int:
 
 
 def _replay(args) -> int:
-    from casa_core.assistant import ARBITRATIONS
+    from casa_core.assist.assistant import ARBITRATIONS
     from casa_core.defaults import EPSILON
     from casa_core.scene import load_scene
 
@@ -160,10 +160,15 @@ def _collect(paths) -> tuple[list[dict], list, list[str]]:
 
 
 def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
+    from casa_core.analysis.replay import (
+        library_files,
+        replay_differences,
+        replay_trial,
+        trial_settings,
+    )
     from casa_core.figures.replay import replay_figure
     from casa_core.figures.style import save_figure
     from casa_core.io import write_csv
-    from casa_core.replay import library_files, replay_differences, replay_trial, trial_settings
 
     check = trial["check"]
     meta = check.meta or {}

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from casa_core.cli import robustness
 from casa_core.cli._options import example
+from casa_core.io import read_table
 
 #: One example per page, shown by each command's --help.
 _EXAMPLES = {
@@ -90,12 +91,12 @@ def _fail(error: Exception) -> int:
 
 
 def _summary(args) -> int:
-    from casa_core import datasets, report_pages
     from casa_core.io.atomic import atomic_write_text
+    from casa_core.report import pages as report_pages
     from casa_core.stats.summary import summary_markdown
 
     try:
-        text = summary_markdown(datasets.read_table(args.stats), dataset=args.dataset)
+        text = summary_markdown(read_table(args.stats), dataset=args.dataset)
     except (OSError, ValueError) as error:
         return _fail(error)
     atomic_write_text(args.out_md, text)
@@ -108,8 +109,8 @@ def _summary(args) -> int:
 
 
 def _results(args) -> int:
-    from casa_core import report_pages
     from casa_core.io.atomic import atomic_write_text
+    from casa_core.report import pages as report_pages
     from casa_core.stats.claims import evaluate_claims
     from casa_core.stats.results import results_markdown
 
@@ -132,8 +133,8 @@ def _results(args) -> int:
 
 
 def _markdown(args) -> int:
-    from casa_core import report_pages
     from casa_core.io.atomic import atomic_write_text
+    from casa_core.report import pages as report_pages
 
     try:
         text = Path(args.markdown).read_text(encoding="utf-8")
@@ -146,11 +147,11 @@ def _markdown(args) -> int:
 
 
 def _table(args) -> int:
-    from casa_core import datasets, report_pages
     from casa_core.io.atomic import atomic_write_text
+    from casa_core.report import pages as report_pages
 
     try:
-        frame = datasets.read_table(args.table)
+        frame = read_table(args.table)
     except (OSError, ValueError) as error:
         return _fail(error)
     title = args.title or Path(args.table).name

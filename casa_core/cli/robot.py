@@ -31,8 +31,8 @@ def _add_teleop(commands) -> None:
         ),
     )
     # The model's defaults, written once in the assistant.
+    from casa_core.assist.presets import DEFAULT_PRESET
     from casa_core.defaults import DEMONSTRATIONS, EPSILON
-    from casa_core.presets import DEFAULT_PRESET
 
     command.add_argument("--task", required=True, choices=vocabulary.TASKS)
     command.add_argument("--method", required=True, choices=vocabulary.METHODS)
@@ -82,7 +82,7 @@ def _add_teleop(commands) -> None:
 
 
 def _teleop(args) -> int:
-    from casa_core.presets import preset
+    from casa_core.assist.presets import preset
     from casa_core.scene import load_scene
     from casa_core.study.closed_loop import trial_intents
     from casa_core.study.teleop_session import teleop_session
@@ -125,7 +125,7 @@ def _add_bench(commands) -> None:
         "on the last line with step_us_goal3, step_us_neural1, scaling (n_intents, step_us, "
         "assisting), trial_realtime_factor, trial_realtime_factor_wall, "
         "trial_realtime_factor_new_sim, participant_cpu_s, irl_s (and their _all lists) "
-        "and targets_met (CPU time of one thread or process; see casa_core.bench).",
+        "and targets_met (CPU time of one thread or process; see casa_core.bench.suite).",
         **example("casa bench --json | tail -n 1 > bench.json"),
     )
     command.add_argument("--json", action="store_true", help="print the JSON line last")
@@ -145,7 +145,7 @@ def _bench(args) -> int:
 
     import torch
 
-    from casa_core import bench
+    from casa_core.bench import suite as bench
     from casa_core.config import DEFAULT_CONFIG, load_config
     from casa_core.scene import load_scene
 

@@ -11,6 +11,7 @@ import sys
 
 from casa_core.cli._options import example, positive_float
 from casa_core.defaults import EPSILON
+from casa_core.io import read_table
 
 _CLAIMS_EXAMPLE = (
     "casa report claims --trials data/processed/robustness/paper/trials.csv \\",
@@ -53,10 +54,9 @@ def add_claim_options(command) -> None:
 
 def read_claim_tables(args) -> dict:
     """The tables of :data:`CLAIM_TABLES` that ``args`` names, read; None for the others."""
-    from casa_core import datasets
 
     paths = {name: getattr(args, name) for name, _ in CLAIM_TABLES}
-    return {name: datasets.read_table(path) if path else None for name, path in paths.items()}
+    return {name: read_table(path) if path else None for name, path in paths.items()}
 
 
 def register_pages(pages) -> None:
@@ -103,7 +103,7 @@ def _claims(args) -> int:
     if args.config:
         # A ConfigError names the file and the key (exit status 2, casa_core/cli/__init__.py).
         from casa_core.config import load_config
-        from casa_core.variants import settings_text
+        from casa_core.experiments.robustness import settings_text
 
         settings = settings_text(load_config(args.config))
     try:
@@ -119,14 +119,13 @@ def _claims(args) -> int:
 
 
 def _robustness(args) -> int:
-    from casa_core import datasets
     from casa_core.figures.robustness import robustness_figure
     from casa_core.figures.style import save_figure
     from casa_core.io.atomic import atomic_write_text, write_csv
     from casa_core.stats.robustness import merge_variants, robustness_markdown
 
     try:
-        merged = merge_variants([datasets.read_table(path) for path in args.claims])
+        merged = merge_variants([read_table(path) for path in args.claims])
         text = robustness_markdown(merged)
         fig = robustness_figure(merged)
     except (OSError, ValueError) as error:

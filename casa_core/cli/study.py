@@ -150,7 +150,7 @@ def _run_stage(args) -> int:
     from casa_core.study import simulate
 
     if args.stage == "learning-table":
-        from casa_core.datasets import read_table
+        from casa_core.io import read_table
 
         for paths, out in ((args.rows, args.out), (args.timing_rows, args.timing)):
             if out:

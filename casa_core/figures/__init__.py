@@ -4,12 +4,20 @@ Each module draws one figure from pandas DataFrames (the processed tables) and r
 a :class:`matplotlib.figure.Figure`; :func:`save_figure` writes it as vector PDF plus a
 200 dpi PNG, atomically. :mod:`.style` holds the colours, words and layout they share.
 
-- :func:`objective_figure` -- ``trials.csv`` (+ ``stats.csv``): error, efficiency, effort
-- :func:`likert_figure` -- ``likert.csv`` (+ ``stats.csv``): the three questions per task
-- :func:`arbitration_figure` -- ``arbitration.csv``: belief, confidence and three alphas
-- :func:`case_study_figure` -- ``steps.csv``: confidence and alpha over time per task
-- :func:`scene_figure` -- a rendering of the arm and scene
-  (:func:`casa_core.robot.render.render_scene`), with its legend
+- :mod:`~casa_core.figures.objective`: ``trials.csv`` (+ ``stats.csv``): error,
+  efficiency, effort (:func:`objective_figure`)
+- :mod:`~casa_core.figures.likert`: ``likert.csv`` (+ ``stats.csv``): the three questions
+  per task (:func:`likert_figure`)
+- :mod:`~casa_core.figures.arbitration`: ``arbitration.csv``: belief, confidence and three
+  alphas (:func:`arbitration_figure`)
+- :mod:`~casa_core.figures.case_study`: ``steps.csv``: confidence and alpha over time per
+  task (:func:`case_study_figure`)
+- :mod:`~casa_core.figures.scene`: a rendering of the arm and scene, with its legend
+  (:func:`scene_figure`)
+- :mod:`~casa_core.figures.replay`: a replay's confidence beside the logged one
+- :mod:`~casa_core.figures.robustness`: the claims under each modelling variant
+- :mod:`~casa_core.figures.power`: power against the number of participants
+- :mod:`~casa_core.figures.build`: the figures of one dataset, from its folder
 """
 
 from casa_core.figures.arbitration import arbitration_figure

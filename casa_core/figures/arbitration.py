@@ -11,8 +11,8 @@ from __future__ import annotations
 import pandas as pd
 from matplotlib.figure import Figure
 
-from casa_core import tables
 from casa_core.figures import style
+from casa_core.io import tables
 
 #: alpha column of arbitration.csv -> (legend label, colour, line style). The distance and
 #: confidence schemes take the colours of their methods (PBA, CASA).

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from casa_core.datasets import read_table
 from casa_core.figures import style
+from casa_core.io import read_table
 
 #: Figure name -> its inputs (keywords of :func:`build_figure`): the paths of the tables it
 #: reads; for the scene, the rendered image (an array).

@@ -13,8 +13,8 @@ from __future__ import annotations
 import pandas as pd
 from matplotlib.figure import Figure
 
-from casa_core import tables
 from casa_core.figures import style
+from casa_core.io import tables
 from casa_core.vocabulary import TASK_LABELS
 
 COLUMNS = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]

@@ -14,9 +14,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from casa_core import tables
 from casa_core.figures import _bars, style
 from casa_core.figures.objective import SIGNIFICANCE, parse_comparison, stars
+from casa_core.io import tables
 from casa_core.stats.study import answered_by_model
 from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
 

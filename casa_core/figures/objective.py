@@ -7,7 +7,7 @@ one bar per condition (NA, PBA, CASA, CASA before / after learning where they ap
 for the metrics the mean and standard error over participants, every participant as a
 point (a cross when the trial ran out of time) and significance brackets from the Tukey
 HSD rows of the stats table for that task; for success the proportion of trials that
-succeeded (:func:`casa_core.metrics.task_success`) with its Wilson 95 % interval and
+succeeded (:func:`casa_core.analysis.metrics.task_success`) with its Wilson 95 % interval and
 the counts.
 """
 
@@ -19,9 +19,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from casa_core import tables
+from casa_core.defaults import POUR_TILT_TOLERANCE, SUCCESS_RADIUS
 from casa_core.figures import _bars, style
-from casa_core.metrics import POUR_TILT_TOLERANCE, SUCCESS_RADIUS
+from casa_core.io import tables
 from casa_core.vocabulary import (
     CASA_AFTER_LEARNING,
     CASA_BEFORE_LEARNING,

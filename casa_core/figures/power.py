@@ -12,8 +12,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from casa_core import tables
 from casa_core.figures import style
+from casa_core.io import tables
 from casa_core.stats.power import ANALYSES, METRICS, PAPER_N, POWER_COLUMNS
 
 #: The conventional target power.

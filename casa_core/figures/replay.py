@@ -4,7 +4,7 @@ Three panels side by side, as a row of the case study (:mod:`.case_study`): the 
 P(theta | xi) in each intent, the confidence ``beta_hat`` in each intent (with the
 misspecification threshold ``epsilon`` dotted, when given) and the user's control
 authority ``alpha`` the replayed arbitration gives. It takes the replay table alone
-(:data:`casa_core.replay.COLUMNS`).
+(:data:`casa_core.analysis.replay.COLUMNS`).
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from __future__ import annotations
 import pandas as pd
 from matplotlib.figure import Figure
 
-from casa_core import tables
 from casa_core.figures import style
 from casa_core.figures.case_study import threshold_label
+from casa_core.io import tables
 
 #: The columns the figure reads.
 COLUMNS = ["t", "intent", "beta", "belief", "alpha"]

@@ -13,10 +13,10 @@ from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
-from casa_core import tables
+from casa_core.config import DEFAULT_VARIANT
 from casa_core.figures import style
+from casa_core.io import tables
 from casa_core.stats.claims import MODEL_OUTPUT, VERDICTS
-from casa_core.variants import DEFAULT_VARIANT
 
 #: Verdict -> cell colour (Okabe-Ito: green holds, yellow partly, vermillion differs;
 #: greys where the data cannot decide).

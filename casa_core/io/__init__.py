@@ -4,11 +4,14 @@
 code needs; the contract is ``docs/data-contracts.md``. The modules, each with one job:
 
 - :mod:`~casa_core.io.contract`: casa-trial/1 and the surveys file as data;
+- :mod:`~casa_core.io.metadata`: the rules of a trial's metadata;
 - :mod:`~casa_core.io.validation`: the rules, reporting through
   :mod:`~casa_core.io.problems` (:class:`Problem`, :class:`LogError`);
 - :mod:`~casa_core.io.trial_log`: the one reader and writer of trials and surveys;
 - :mod:`~casa_core.io.folders`: checking files and folders of a dataset;
-- :mod:`~casa_core.io.atomic`: the one atomic writer of every output.
+- :mod:`~casa_core.io.atomic`: the one atomic writer of every output;
+- :mod:`~casa_core.io.tables`: the processed tables read back, and tidy tables' input checks;
+- :mod:`~casa_core.io.original`: the original implementation's session files.
 """
 
 from casa_core.io.atomic import (
@@ -30,6 +33,7 @@ from casa_core.io.contract import (
     SURVEYS_NAME,
 )
 from casa_core.io.folders import FileCheck, check_files, check_paths, find_files, validate_paths
+from casa_core.io.tables import read_table
 from casa_core.io.trial_log import (
     load_meta,
     load_surveys,
@@ -76,6 +80,7 @@ __all__ = [
     "parse_surveys_csv",
     "parse_trial_csv",
     "read_surveys",
+    "read_table",
     "read_trial",
     "trial_files",
     "trial_stem",

@@ -72,7 +72,7 @@ __all__ = [
 SCHEMA = "casa-trial/1"
 #: The name of every file of Likert answers.
 SURVEYS_NAME = "surveys.csv"
-#: The suffix of a learned intent's file (casa-intent, casa_core.library).
+#: The suffix of a learned intent's file (casa-intent, casa_core.learning.library).
 INTENT_SUFFIX = ".intent.json"
 
 #: Metadata keys every trial has, and the ones it may have.

@@ -9,8 +9,10 @@ each with one job:
 - :mod:`~casa_core.learning.config`: the settings (:class:`IRLConfig`);
 - :mod:`~casa_core.learning.demonstrations`: demonstrations resampled for IRL;
 - :mod:`~casa_core.learning.maxent`: the estimator (:class:`MaxEntIRL`);
-- :mod:`~casa_core.study.learn_from_logs`: trial logs in, an intent library file out
-  (imported on its own: it uses :mod:`casa_core.library`, which uses this package).
+- :mod:`~casa_core.learning.numpy_cost`, :mod:`~casa_core.learning.adam`: the same cost
+  and its gradient without autograd, and the network's Adam written out;
+- :mod:`~casa_core.learning.library`: the intent file format (casa-intent): save, load,
+  check, list (imported on its own: it uses this package).
 """
 
 from casa_core.learning.config import IRLConfig

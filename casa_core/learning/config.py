@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from casa_core._checks import require_positive
-from casa_core.intents import COST_FORMS
+from casa_core.assist.intents import COST_FORMS
+from casa_core.model._checks import require_positive
 from casa_core.planning import PlannerConfig
 
 
@@ -35,7 +35,7 @@ class IRLConfig:
     calibration : {"path_length", "distance_sum"} or None
         After training, the cost is multiplied by the factor that makes its
         optimal cost from the demonstrations' mean start equal to that of a
-        :class:`~casa_core.intents.GoalIntent` of this cost form whose goal is
+        :class:`~casa_core.assist.intents.GoalIntent` of this cost form whose goal is
         where that optimal trajectory ends: learned and goal intents then charge
         the same for the same task done optimally, so their suboptimalities,
         confidences and beliefs compare. Default ``"path_length"``, the goal

@@ -11,7 +11,7 @@ the formula is written.
 
 Input features, in this order (:func:`feature_names`):
     1. end-effector rotation matrix R(rot), row-major (9;
-       :func:`casa_core.rotation.end_effector_rotation`);
+       :func:`casa_core.planning.rotation.end_effector_rotation`);
     2. end-effector position x, y, z (3);
     3. for each scene object, its position minus the end effector's (3 each);
     4. for each object, its distance to the end effector (1 each): a function of
@@ -39,7 +39,7 @@ from collections.abc import Mapping
 import numpy as np
 import torch
 
-from casa_core.rotation import end_effector_rotation
+from casa_core.planning.rotation import end_effector_rotation
 
 
 def feature_names(object_names) -> list[str]:

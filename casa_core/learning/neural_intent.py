@@ -7,10 +7,10 @@ from collections.abc import Mapping
 import numpy as np
 import torch
 
-from casa_core._checks import require_positive
-from casa_core.intents import COST_FORMS, GoalIntent
+from casa_core.assist.intents import COST_FORMS, GoalIntent
 from casa_core.learning.features import bounded_cost, cost_logits, feature_names, object_positions
 from casa_core.learning.numpy_cost import NumpyStateCost
+from casa_core.model._checks import require_positive
 from casa_core.planning import Plan, PlannedIntent, PlannerConfig
 
 
@@ -122,7 +122,7 @@ def calibrate(intent: NeuralIntent, start, *, cost: str) -> tuple[NeuralIntent, 
     """The intent with its cost scaled to match a goal intent's (``IRLConfig.calibration``).
 
     The factor makes the intent's optimal cost from ``start`` equal that of a
-    :class:`~casa_core.intents.GoalIntent` of cost form ``cost`` whose goal is where
+    :class:`~casa_core.assist.intents.GoalIntent` of cost form ``cost`` whose goal is where
     that optimal trajectory ends. Returns the calibrated intent (a new one: plans are
     not shared) and the factor applied. Where the learned optimum from ``start``
     costs nothing (the person stays where they are), there is nothing to match and

@@ -40,9 +40,9 @@ import numpy as np
 import torch
 
 from casa_core.learning import _kernels
-from casa_core.rotation import R0
+from casa_core.planning.rotation import R0
 
-# R(rot) = cos(rot) A + sin(rot) B + C, row-major (casa_core.rotation.end_effector_rotation).
+# R(rot) = cos(rot) A + sin(rot) B + C, row-major (planning.rotation.end_effector_rotation).
 _ZERO = np.zeros(3)
 _BASIS = np.stack(
     [

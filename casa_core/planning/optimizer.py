@@ -2,7 +2,7 @@
 
 The paper computes optimal trajectories xi* "with any off-the-shelf trajectory
 optimizer" (footnote to Sec. II-B; the original used TrajOpt). Goal intents have
-a closed-form optimum (:mod:`casa_core.intents`); the pouring skill and learned
+a closed-form optimum (:mod:`casa_core.assist.intents`); the pouring skill and learned
 (neural) costs do not, and are planned here.
 
 A trajectory is ``n + 1`` states ``[x, y, z, rot]`` every ``dt`` seconds (the
@@ -14,7 +14,7 @@ cost-to-go is the cost of the whole (the decomposition the paper's eq. 3 needs).
 Each step is bounded by the keyboard's speed limits times ``dt``: by default
 0.05 m/s on each Cartesian axis and 0.5 rad/s on rot (the original's keyboard), i.e. a
 box of 0.025 m x 3 and 0.25 rad per step; ``limit="norm"`` bounds the Euclidean
-speed of the position instead (what :class:`casa_core.assistant.Assistant` uses
+speed of the position instead (what :class:`casa_core.assist.assistant.Assistant` uses
 for its own action u*).
 
 The optimizer works on the states themselves, in units of the per-step limit,
@@ -46,8 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from casa_core._checks import require_positive
 from casa_core.defaults import DT, HORIZON, ROT_SPEED, SPEED
+from casa_core.model._checks import require_positive
 from casa_core.planning import _kernels
 
 #: Cost of states: takes a tensor ``(B, n, 4)`` and returns per-state costs ``(B, n)``.

@@ -14,7 +14,7 @@ from collections import OrderedDict
 import numpy as np
 import torch
 
-from casa_core.intents import Intent
+from casa_core.assist.intents import Intent
 from casa_core.planning.optimizer import Plan, PlannerConfig, optimize, steps_left, warm_start_from
 
 

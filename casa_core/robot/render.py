@@ -3,7 +3,7 @@
 The JACO arm at the start pose, the table, the goals in their colours, the pouring
 target and bowl come from :class:`~casa_core.robot.sim.ArmSimulation` (which loads the
 arm's URDF and builds the scene); this module adds the tasks' intended trajectories
-(:func:`casa_core.tasks.intended_trajectory`) as thin tubes, the cup in the hand at the
+(:func:`casa_core.assist.tasks.intended_trajectory`) as thin tubes, the cup in the hand at the
 start, the cup tilted at the pouring pose and a dashed plumb line from there down to
 the bowl, and renders the view with ``ER_TINY_RENDERER``, which needs no display or
 GPU. :func:`scene_landmarks` gives where the cup, the pouring pose and the bowl land in
@@ -16,10 +16,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.robot.kinematics import ee_rotation
 from casa_core.robot.scene import BOWL_RADIUS, COLORS, bowl_height
 from casa_core.scene import Scene
-from casa_core.tasks import intended_trajectory
 
 TUBE_RADIUS = 0.005  # m
 #: The cup as drawn: a cylinder along the tool's x axis (its mouth), centred where the

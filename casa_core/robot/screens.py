@@ -20,10 +20,10 @@ from collections.abc import Callable
 import numpy as np
 import pybullet as p
 
+from casa_core.assist.tasks import task_waypoints
 from casa_core.robot.sim import ArmSimulation
 from casa_core.robot.teleop import HELP, KeyboardKeys, KeyLatch, Window
 from casa_core.scene import Scene
-from casa_core.tasks import task_waypoints
 
 ENTER = p.B3G_RETURN
 PAUSE, CONTINUE, QUIT, YES, NO = (ord(key) for key in "pcqyn")
@@ -211,7 +211,7 @@ class SessionWindow:
     def preview(self, task: str, reference: np.ndarray, seconds: float) -> None:
         """The task's reference path as a line, a marker travelling along it in ``seconds``.
 
-        ``reference`` is :func:`casa_core.tasks.intended_trajectory`'s ``[t, x, y, z, rot]``.
+        ``reference`` is :func:`casa_core.assist.tasks.intended_trajectory`'s ``[t, x, y, z, rot]``.
         """
         if seconds <= 0:
             return

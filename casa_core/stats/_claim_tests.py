@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from casa_core.io.tables import numeric_column, require_columns
 from casa_core.stats.apa import p_value
 from casa_core.stats.study import POOLED, _conditions, _prepare_trials
-from casa_core.tables import numeric_column, require_columns
 from casa_core.vocabulary import (
     CASA_AFTER_LEARNING,
     CASA_BEFORE_LEARNING,

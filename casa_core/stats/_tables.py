@@ -1,4 +1,4 @@
-"""Small helpers shared by the statistics modules (input checks: :mod:`casa_core.tables`).
+"""Small helpers shared by the statistics modules (input checks: :mod:`casa_core.io.tables`).
 
 Two kinds of trouble are kept apart on purpose:
 
@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from casa_core.tables import numeric_column, require_columns
+from casa_core.io.tables import numeric_column, require_columns
 
 
 class Skipped(Exception):

@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pandas as pd
 
+from casa_core.io.tables import require_columns
 from casa_core.stats.descriptives import data_lines
 from casa_core.stats.study import MODEL_OUTPUT_NOTE, STATS_COLUMNS
-from casa_core.tables import require_columns
 
 #: Section titles of the report, one per hypothesis, in order.
 TITLES = {

@@ -16,9 +16,9 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from casa_core.io.tables import numeric_columns, require_columns
 from casa_core.stats import _claim_tests as tests
 from casa_core.stats.study import answered_by_model
-from casa_core.tables import numeric_columns, require_columns
 from casa_core.vocabulary import KNOWN_TASK, LEARNED_NAMES, UNKNOWN_TASKS
 
 CLAIM_COLUMNS = ["claim", "statement", "criterion", "measured", "value", "verdict", "details"]
@@ -38,7 +38,7 @@ ALPHA_IN_CONTROL = 0.95
 #: then exceeds the user's.
 ALPHA_TAKEN = 0.5
 #: The Known Goal task's goal among the robot's intents: its intended trajectory ends at
-#: the green goal (casa_core.tasks.task_waypoints).
+#: the green goal (casa_core.assist.tasks.task_waypoints).
 TRUE_GOAL = {KNOWN_TASK: "green"}
 #: What the paper says, in brief (Sec. IV-B to IV-D; hypotheses as in Sec. V-A).
 STATEMENTS = {
@@ -289,7 +289,7 @@ def evaluate_claims(tables: Mapping[str, pd.DataFrame | None], *, epsilon: float
     Parameters
     ----------
     tables : mapping of str to DataFrame
-        The dataset's processed tables, read with :func:`casa_core.datasets.read_table`:
+        The dataset's processed tables, read with :func:`casa_core.io.read_table`:
         ``trials``, ``steps`` and ``stats`` (required); optional (None or absent when
         there is none): ``likert``, and the case study's ``arbitration`` (the
         arbitration comparison, for C3) and ``case_steps`` (its expert's runs, which add

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from casa_core.io.tables import require_columns
 from casa_core.stats.study import CONDITION_ORDER, METRICS, _prepare_trials
-from casa_core.tables import require_columns
 from casa_core.vocabulary import TASK_LABELS
 
 DESCRIPTIVE_COLUMNS = ["task", "condition", "metric", "mean", "sd", "n"]

@@ -15,10 +15,10 @@ from collections.abc import Iterable, Sequence
 
 import pandas as pd
 
+from casa_core.io.tables import require_columns
 from casa_core.stats import _claim_tests as checks
 from casa_core.stats.margins import Margins
 from casa_core.stats.study import analyze_study
-from casa_core.tables import require_columns
 
 #: Detected: in one replicate, every check of the hypothesis on the metric in that form
 #: passed -- each superiority test at p < .05 (the paper's alpha; the omnibus test and

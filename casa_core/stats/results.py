@@ -12,8 +12,8 @@ from collections.abc import Mapping
 
 import pandas as pd
 
+from casa_core.io.tables import require_columns
 from casa_core.stats.claims import CLAIM_COLUMNS, MODEL_OUTPUT, answered_by_model
-from casa_core.tables import require_columns
 
 #: What each verdict means next to the paper, said under the claim.
 VERDICT_WORDS = {

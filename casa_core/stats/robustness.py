@@ -12,9 +12,9 @@ from collections.abc import Sequence
 
 import pandas as pd
 
+from casa_core.config import DEFAULT_VARIANT
+from casa_core.io.tables import require_columns
 from casa_core.stats.claims import CLAIM_COLUMNS
-from casa_core.tables import require_columns
-from casa_core.variants import DEFAULT_VARIANT
 
 #: One row per claim and variant: the verdict, the number behind it, the variant's choices.
 ROBUSTNESS_COLUMNS = ["claim", "variant", "verdict", "value", "settings", "criterion", "measured"]
@@ -30,7 +30,7 @@ def variant_claims(claims: pd.DataFrame, *, variant: str, settings: str = "") ->
     variant : str
         The variant's name.
     settings : str
-        Its modelling choices in words (:func:`casa_core.variants.settings_text`).
+        Its modelling choices in words (:func:`casa_core.experiments.robustness.settings_text`).
 
     Examples
     --------

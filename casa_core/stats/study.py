@@ -19,10 +19,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from casa_core.io.tables import numeric_column, require_columns
 from casa_core.stats import between, posthoc, within
 from casa_core.stats._rows import STATS_COLUMNS, Rows
 from casa_core.stats.margins import Margins
-from casa_core.tables import numeric_column, require_columns
 from casa_core.vocabulary import (
     ANSWERED_BY,
     CASA_AFTER_LEARNING,

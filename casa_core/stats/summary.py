@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import pandas as pd
 
+from casa_core.io.tables import require_columns
 from casa_core.stats.apa import ANALYSIS_NAMES, TITLES, model_output_lines, result
 from casa_core.stats.study import LOG_EFFORT, POOLED, STATS_COLUMNS
-from casa_core.tables import require_columns
 from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
 
 #: Per hypothesis: the task label of its rows, the paper's test, the within-subjects test.

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from casa_core.assistant import Assistant
+from casa_core.assist.assistant import Assistant
 
 COLUMNS = ["t", "intent", "belief", "beta", "alpha_distance", "alpha_belief", "alpha_confidence"]
 

@@ -3,7 +3,7 @@
 Every control tick (0.05 s) :func:`run_trial` reads the arm's state ``[x, y, z, rot]``
 from pybullet, asks the key source (:mod:`casa_core.study.key_sources`) which keys are
 held, turns them into the user's Cartesian action (the paper's direct teleoperation T),
-lets the :class:`~casa_core.assistant.Assistant` blend it with the robot's action u*,
+lets the :class:`~casa_core.assist.assistant.Assistant` blend it with the robot's action u*,
 and drives the arm with the blend for one tick. Every 0.5 s (twice per second, as in
 the paper) the assistant first updates its inference with the state reached. The trial
 ends when the key source says it is done or at ``max_duration``.
@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from casa_core.assistant import Assistant
+from casa_core.assist.assistant import Assistant
+from casa_core.assist.intents import GoalIntent, Intent
+from casa_core.assist.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.defaults import DT
-from casa_core.intents import GoalIntent, Intent
 from casa_core.io import write_trial
-from casa_core.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.robot.keys import check_keys, format_keys, keys_to_action
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import Scene
@@ -82,16 +82,18 @@ def trial_intents(
 ) -> list:
     """What the robot knows: the known goals, then each learned intent file (casa-intent/1).
 
-    The goals' cost is the one of the ``inference`` preset (:mod:`casa_core.presets`).
+    The goals' cost is the one of the ``inference`` preset (:mod:`casa_core.assist.presets`).
 
     Raises
     ------
-    casa_core.library.LibraryError
+    casa_core.learning.library.LibraryError
         (a ``ValueError``) naming a learned-intent file that cannot be used.
     """
     intents = known_goal_intents(scene, **as_preset(inference).goal_options())
     if learned:
-        from casa_core.library import load_intent  # torch and the IRL code load only if needed
+        from casa_core.learning.library import (
+            load_intent,  # torch and the IRL code load only if needed
+        )
 
         intents += [load_intent(path).intent for path in learned]
     return intents
@@ -157,10 +159,10 @@ def run_trial(
     sim : ArmSimulation, optional
         Simulation to run in (e.g. a window); default a new headless one, closed after.
     inference : Preset or str, default "casa"
-        The inference preset (:mod:`casa_core.presets`): the assistant's evidence,
+        The inference preset (:mod:`casa_core.assist.presets`): the assistant's evidence,
         prior, suboptimality scale and goal cost.
     assistant_options : dict, optional
-        Extra keyword arguments of :class:`~casa_core.assistant.Assistant`, over the
+        Extra keyword arguments of :class:`~casa_core.assist.assistant.Assistant`, over the
         preset's.
     on_tick : callable, optional
         ``on_tick(t, state, keys, alpha)`` after each logged tick (windows, pacing).
@@ -212,7 +214,7 @@ def run_trial(
         "intents": [intent.name for intent in intents],
         "max_duration": float(max_duration),  # so a reader can tell a trial that ran out
     }
-    # What inference assumed, so that a replay can redo it (casa_core.replay).
+    # What inference assumed, so that a replay can redo it (casa_core.analysis.replay).
     meta["inference"] = {"preset": inference.name, "evidence": assistant.evidence}
     if seed is not None:
         meta["seed"] = int(seed)

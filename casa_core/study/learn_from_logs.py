@@ -8,8 +8,8 @@ from pathlib import Path
 
 from casa_core.io import find_files, load_meta, read_trial
 from casa_core.learning.config import IRLConfig
+from casa_core.learning.library import intent_path, save_intent
 from casa_core.learning.maxent import MaxEntIRL
-from casa_core.library import intent_path, save_intent
 
 
 def read_demonstrations(

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from casa_core.planning import PlannedIntent
+from casa_core.planning.pouring import cup_tilt_deg
 from casa_core.scene import Scene
-from casa_core.skills import cup_tilt_deg
 
 #: The scene objects whose positions are the learned cost's features, in feature order.
 STUDY_OBJECTS = ("green", "purple", "red", "pouring", "bowl")
@@ -49,7 +49,7 @@ def learning_evidence(intent: PlannedIntent, demos) -> dict:
     Examples
     --------
     >>> from casa_core.scene import load_scene
-    >>> from casa_core.skills import PouringIntent
+    >>> from casa_core.planning.pouring import PouringIntent
     >>> scene = load_scene()
     >>> demo = np.array([[0.0, *scene.start_state], [20.0, *scene.pouring.position, 1.8]])
     >>> evidence = learning_evidence(PouringIntent.from_scene(scene), [demo])

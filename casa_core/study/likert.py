@@ -32,11 +32,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from casa_core import metrics
+from casa_core.analysis import metrics
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.io import SURVEY_COLUMNS, read_trial
 from casa_core.robot.keys import keys_to_action
 from casa_core.scene import Scene
-from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import QUESTIONS, UNANALYSED_PHASES
 
 FIGHT_ANGLE = np.deg2rad(45.0)

@@ -1,7 +1,7 @@
 """Simulated participants: closed-loop keyboard operators.
 
 A participant watches the end effector, follows the task's intended trajectory
-(:func:`casa_core.tasks.intended_trajectory`, the reference shown before each
+(:func:`casa_core.assist.tasks.intended_trajectory`, the reference shown before each
 task) and holds keys of the same 8-key interface a person uses. It is an
 operator model, not a script: it sees the arm's state with a delay and with
 noise, steers toward a point a little ahead on the path, holds a key while the
@@ -383,7 +383,7 @@ def make_participant(
     Examples
     --------
     >>> from casa_core.scene import load_scene
-    >>> from casa_core.tasks import intended_trajectory
+    >>> from casa_core.assist.tasks import intended_trajectory
     >>> params = ParticipantParams(0.35, 0.01, 0.015, 0.03, 0.8, 0.02, 2)
     >>> reference = intended_trajectory("known_goal", load_scene())
     >>> rng = np.random.default_rng(0)

@@ -28,9 +28,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from casa_core.assist.presets import Preset
 from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_surveys, read_trial, write_surveys
 from casa_core.io.contract import INTENT_SUFFIX, SINGLE_TRIAL_PHASES
-from casa_core.presets import Preset
 from casa_core.scene import Scene
 from casa_core.study import protocol
 from casa_core.study.closed_loop import TrialResult

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pybullet as p
 
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.defaults import HORIZON
 from casa_core.io import SCHEMA, check_meta
 from casa_core.io.atomic import atomic_write_text
@@ -33,7 +34,6 @@ from casa_core.study.session import (
     label_of,
     method_order_line,
 )
-from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import LEARNED_NAMES, QUESTIONS
 
 COMPLETE, STOPPED = "complete", "stopped"

@@ -7,8 +7,8 @@ The texts name the robots by their neutral labels only
 
 from __future__ import annotations
 
+from casa_core.assist.tasks import PRACTICE_GOAL
 from casa_core.study.protocol import TrialSpec
-from casa_core.tasks import PRACTICE_GOAL
 
 #: Where each task goes, in words (the window also highlights it).
 TARGETS = {

@@ -20,15 +20,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from casa_core.assist.presets import DEFAULT_PRESET, Preset, preset
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.config import default
 from casa_core.defaults import DEMONSTRATIONS
 from casa_core.io import SURVEYS_NAME, write_surveys
-from casa_core.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.scene import Scene
 from casa_core.study import likert, protocol
 from casa_core.study.closed_loop import as_preset, known_goal_intents, run_trial, trial_intents
 from casa_core.study.participants import ParticipantParams, draw_participants, make_participant
-from casa_core.tasks import intended_trajectory
 from casa_core.vocabulary import LEARNED_NAMES, UNKNOWN_TASKS
 
 #: Stream numbers of default_rng([seed, index, stream]).
@@ -183,7 +183,7 @@ def learn_from_demonstrations(
     that the results are the same bytes on every run. The logs in ``logs`` (by the
     ``.json``'s path, as :func:`casa_core.io.write_trial` returns them) are not read again.
     """
-    from casa_core.library import load_intent
+    from casa_core.learning.library import load_intent
     from casa_core.study.learn_from_logs import learn_to_library, read_demonstrations
     from casa_core.study.learning_evidence import learning_evidence, scene_objects
 
@@ -303,7 +303,7 @@ def simulate_protocol(
     >>> len(run.before), [row["task"] for row in run.rows], run.learned, run.after
     (10, ['unknown_goal', 'unknown_skill'], [], [])
     """
-    from casa_core.library import intent_path
+    from casa_core.learning.library import intent_path
 
     pid = pid or participant_id(index)
     params = params or participant_params(index, simulation)
@@ -367,9 +367,9 @@ def run_case_study(
         :func:`casa_core.study.arbitration_comparison.compare_arbitrations` along the
         optimal trajectory to the red goal, known goals green and purple.
     """
-    from casa_core.assistant import Assistant
-    from casa_core.datasets import build_tables
-    from casa_core.intents import GoalIntent
+    from casa_core.analysis.datasets import build_tables
+    from casa_core.assist.assistant import Assistant
+    from casa_core.assist.intents import GoalIntent
     from casa_core.study.arbitration_comparison import compare_arbitrations
 
     work_dir = Path(work_dir)

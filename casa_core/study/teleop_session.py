@@ -13,9 +13,9 @@ from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 
+from casa_core.assist.presets import DEFAULT_PRESET, Preset
 from casa_core.defaults import DEMONSTRATIONS, EPSILON
 from casa_core.io import SCHEMA, check_meta, read_trial
-from casa_core.presets import DEFAULT_PRESET, Preset
 from casa_core.robot.sim import ArmSimulation
 from casa_core.robot.teleop import KeyboardKeys, Window
 from casa_core.scene import Scene
@@ -76,9 +76,9 @@ def run_teleop(
         Shown in the window before the countdown; default the task's name (never the
         method's).
     inference : Preset or str, default "casa"
-        The inference preset (:mod:`casa_core.presets`).
+        The inference preset (:mod:`casa_core.assist.presets`).
     assistant_options : dict, optional
-        Extra keyword arguments of :class:`~casa_core.assistant.Assistant`.
+        Extra keyword arguments of :class:`~casa_core.assist.assistant.Assistant`.
 
     Raises
     ------

@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 from casa_core import config as casa_config
-from casa_core import power as casa_power
-from casa_core import variants as casa_variants
+from casa_core.experiments import power as casa_power
+from casa_core.experiments import robustness as casa_variants
 from casa_core import vocabulary
 from casa_core.io.atomic import atomic_write_text
 
@@ -215,7 +215,7 @@ def stats_input(wildcards):
 
 
 # The robustness target's modelling variants (workflow/rules/robustness.smk;
-# casa_core/variants.py): each variant's whole config, written as the study's is.
+# casa_core/experiments/robustness.py): each variant's whole config, written as the study's is.
 VARIANTS = casa_variants.variant_names(config)
 ROBUST_INTERIM = Path("data/interim/robustness")
 ROBUST = PROCESSED / "robustness"
@@ -248,7 +248,7 @@ def margin_options(wildcards=None):
     return " ".join(Margins.from_config(config["statistics"]).options())
 
 
-# The power target (workflow/rules/power.smk; casa_core/power.py): replicate studies of
+# The power target (workflow/rules/power.smk; casa_core/experiments/power.py): replicate studies of
 # each variant of power.variants, each with its own seed.
 POWER_INTERIM = Path("data/interim/power")
 POWER = PROCESSED / "power"

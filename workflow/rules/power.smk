@@ -1,6 +1,6 @@
 # `snakemake --cores all power`: simulated power of H1-H3 (docs/power.md). For each
 # variant of power.variants and each replicate r of power.replicates, the simulated
-# study with its own seed (casa_core.power.replicate_seed) and as many participants as
+# study with its own seed (casa_core.experiments.power.replicate_seed) and as many participants as
 # the largest N of power.sizes; its study of N is its first N participants. Each
 # participant's whole protocol is one job, the robustness target's (casa simulate
 # protocol), so that the DAG spreads over a cluster one participant a job. Logs, intents

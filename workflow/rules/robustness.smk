@@ -1,5 +1,5 @@
 # `snakemake --cores all robustness`: the simulated study once per modelling variant
-# (config robustness.variants, casa_core/variants.py) and the paper's claims under each.
+# (config robustness.variants, casa_core/experiments/robustness.py) and the paper's claims under each.
 # Each variant has its own config, logs, intents and tables below
 # data/interim/robustness/<variant> and data/processed/robustness/<variant>: variants
 # share nothing they write, and the same seeds. Part of the default target unless

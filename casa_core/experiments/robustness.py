@@ -25,8 +25,9 @@ from __future__ import annotations
 import copy
 from collections.abc import Mapping
 
-#: The variant that overlays nothing: the study's config as it is.
-DEFAULT_VARIANT = "default"
+from casa_core.assist.presets import preset
+from casa_core.config import default, merge, validate_config
+
 #: The keys an overlay may set: section -> its keys (None: every key of the section).
 OVERLAY_KEYS: dict[str, tuple[str, ...] | None] = {
     "inference": None,
@@ -34,43 +35,6 @@ OVERLAY_KEYS: dict[str, tuple[str, ...] | None] = {
 }
 #: The config blocks of the targets that run variants, left out of a variant's config.
 RUNNING_BLOCKS = ("robustness", "power")
-
-
-def variant_problems(config: Mapping) -> list[str]:
-    """``key: rule`` for every problem of a validated config's ``robustness`` block.
-
-    Each overlay is checked against the config's schema (an unknown preset is named as
-    ``robustness.variants.NAME.inference.preset``); the default variant must exist and
-    overlay nothing; every name in ``robustness.run`` must be a variant.
-
-    Examples
-    --------
-    >>> block = {"variants": {"default": {}, "bad": {"inference": {"preset": "mine"}}}}
-    >>> variant_problems({"robustness": block | {"run": ["default", "other"]}})
-    ... # doctest: +NORMALIZE_WHITESPACE
-    ["robustness.variants.bad.inference.preset: must be one of casa, original, paper,
-      got 'mine'", 'robustness.run: other is not a variant (variants: default, bad)']
-    """
-    from casa_core.config import _problems
-
-    block = config.get("robustness") or {}
-    variants = block.get("variants") or {}
-    problems = []
-    for name, overlay in variants.items():
-        where = f"robustness.variants.{name}"
-        problems += [f"{where}.{problem}" for problem in _problems(overlay, partial=True)]
-        if name == DEFAULT_VARIANT and overlay:
-            problems.append(
-                f"{where}: must overlay nothing (it is the config's own settings); "
-                "give a different choice another name"
-            )
-    if DEFAULT_VARIANT not in variants:
-        problems.append(f"robustness.variants: must contain {DEFAULT_VARIANT!r}, the config itself")
-    for name in block.get("run") or []:
-        if name not in variants:
-            known = ", ".join(variants)
-            problems.append(f"robustness.run: {name} is not a variant (variants: {known})")
-    return problems
 
 
 def variant_names(config: Mapping) -> list[str]:
@@ -110,8 +74,6 @@ def variant_config(config: Mapping, name: str, *, participants: int | None = Non
     >>> variant_config(config, "paper", participants=24)["simulation"]["participants"]
     24
     """
-    from casa_core.config import merge, validate_config
-
     variants = config["robustness"]["variants"]
     if name not in variants:
         known = ", ".join(variants)
@@ -134,9 +96,6 @@ def settings_text(config: Mapping) -> str:
     ...                "simulation": {"operator": "predictive"}})
     'preset casa, evidence commanded, operator predictive'
     """
-    from casa_core.config import default
-    from casa_core.presets import preset
-
     inference = config["inference"]
     evidence = preset(inference["preset"], evidence=inference.get("evidence")).evidence
     operator = config["simulation"].get("operator") or default("simulation.operator")

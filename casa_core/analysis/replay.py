@@ -1,6 +1,6 @@
 """Replay: offline inference over a recorded casa-trial/1 log.
 
-A replay feeds the logged states and keys to an :class:`~casa_core.assistant.Assistant`
+A replay feeds the logged states and keys to an :class:`~casa_core.assist.assistant.Assistant`
 tick by tick, as the closed loop that recorded the trial did: every ``dt`` (0.5 s) the
 assistant updates its inference with the logged state, and every control tick it is
 told the user's action (from the logged keys) and the authority alpha the arm actually
@@ -44,12 +44,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from casa_core.assistant import ARBITRATIONS, Assistant
+from casa_core.assist.assistant import ARBITRATIONS, Assistant
+from casa_core.assist.intents import GoalIntent, Intent
+from casa_core.assist.presets import DEFAULT_PRESET, Preset
+from casa_core.assist.presets import preset as named_preset
 from casa_core.defaults import DT, EPSILON
-from casa_core.intents import GoalIntent, Intent
 from casa_core.io.contract import INTENT_SUFFIX
-from casa_core.presets import DEFAULT_PRESET, Preset
-from casa_core.presets import preset as named_preset
 from casa_core.robot.keys import keys_to_action, parse_keys
 from casa_core.scene import Scene
 from casa_core.vocabulary import METHOD_ARBITRATION
@@ -72,7 +72,7 @@ def trial_settings(
     """The preset (evidence applied) and arbitration a replay of the trial uses.
 
     Each is the trial's own unless given: the preset and evidence of
-    ``meta["inference"]`` (absent: :data:`~casa_core.presets.DEFAULT_PRESET` and its
+    ``meta["inference"]`` (absent: :data:`~casa_core.assist.presets.DEFAULT_PRESET` and its
     evidence), the arbitration of ``meta["method"]`` (:data:`METHOD_ARBITRATION`).
 
     Examples
@@ -192,7 +192,7 @@ def resolve_intents(
 
 
 def _load_learned(path: Path, name: str) -> Intent:
-    from casa_core.library import load_intent  # torch loads only when a trial needs it
+    from casa_core.learning.library import load_intent  # torch loads only when a trial needs it
 
     entry = load_intent(path)
     if entry.intent.name != name:

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from casa_core._checks import as_finite_or_inf, require_positive, scalar_or_array
+from casa_core.model._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
 def alpha_confidence(beta):

@@ -2,7 +2,7 @@
 
 ``casa import original DIR --out data/raw/NAME`` calls :func:`import_original`: each
 ``task<N><letter>_data.npz`` of ``DIR`` becomes ``<out>/<participant>/<stem>.json`` and
-``.csv`` (:mod:`casa_core.original_sessions` converts one file), and the scene of the
+``.csv`` (:mod:`casa_core.io.original.sessions` converts one file), and the scene of the
 original's layout is copied to ``<out>/scene.yaml``, which the pipeline then uses for this
 dataset. Names, in ``docs/data-contracts.md``:
 
@@ -28,16 +28,16 @@ from pathlib import Path
 
 from casa_core.defaults import HORIZON
 from casa_core.io import Problem, atomic_write_text, check_meta, frame_to_csv_text, write_trial
-from casa_core.io.problems import errors
-from casa_core.io.trial_log import inside, trial_files
-from casa_core.io.validation import parse_trial_csv
-from casa_core.original_sessions import (
+from casa_core.io.original.sessions import (
     GOAL_NAMES,
     SessionError,
     convert_session,
     read_session,
     started_at,
 )
+from casa_core.io.problems import errors
+from casa_core.io.trial_log import inside, trial_files
+from casa_core.io.validation import parse_trial_csv
 from casa_core.scene import DEFAULT_SCENE, load_scene
 from casa_core.vocabulary import LEARNED_NAMES, PHASE_METHOD, TASK_PHASES
 
@@ -155,7 +155,7 @@ def _convert(path: Path, name: SessionName, participant: str, target: Path):
         "source": "human",
         "intents": names,
         "max_duration": HORIZON,
-        # The original's own numerics (casa_core.presets): a replay redoes them.
+        # The original's own numerics (casa_core.assist.presets): a replay redoes them.
         "inference": {"preset": "original", "evidence": "executed"},
         "notes": notes,
     }

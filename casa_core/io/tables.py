@@ -1,4 +1,5 @@
-"""Input checks for the tidy tables that statistics and figures take (pandas only).
+"""The processed tables: :func:`read_table` with their values intact, and the input checks
+for the tidy tables that statistics and figures take (pandas only).
 
 A malformed table (a missing column, text where numbers belong) is a caller's mistake:
 these raise ``ValueError`` naming the table, the column, the row and the rule broken.
@@ -17,6 +18,7 @@ trials table: column 'error', row 1: 'high' is not a number
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -76,3 +78,31 @@ def numeric_columns(data: pd.DataFrame, columns: Sequence[str], what: str) -> pd
     for column in columns:
         data[column] = numeric_column(data, column, what)
     return data
+
+
+def read_table(path: Path | str) -> pd.DataFrame:
+    """Read a processed table (trials, steps, likert, validation) with its values intact.
+
+    pandas' defaults would read the method ``"NA"`` as missing and a participant
+    ``"007"`` as the number 7; here only empty cells are missing and identifying
+    columns stay text.
+
+    Parameters
+    ----------
+    path : path or file-like
+        A CSV written by :func:`casa_core.analysis.datasets.write_tables` or
+        :func:`~casa_core.analysis.datasets.write_validation`.
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Examples
+    --------
+    >>> import io
+    >>> table = read_table(io.StringIO("participant,method,score\\n007,NA,5\\n008,,\\n"))
+    >>> table["participant"].tolist(), table["method"].tolist()
+    (['007', '008'], ['NA', nan])
+    """
+    text_columns = {c: str for c in ("dataset", "participant", "trial", "intent", "file")}
+    return pd.read_csv(path, dtype=text_columns, keep_default_na=False, na_values=[""])

@@ -4,7 +4,7 @@ A dataset is a folder of casa-trial/1 logs (``data/raw/<dataset>/``, read only
 through :mod:`casa_core.io`). It becomes four tables, the contract with users
 (``docs/data-contracts.md``):
 
-- ``trials.csv``: one row per trial with its metrics (:mod:`casa_core.metrics`),
+- ``trials.csv``: one row per trial with its metrics (:mod:`casa_core.analysis.metrics`),
   columns :data:`TRIAL_COLUMNS`;
 - ``steps.csv``: one row per tick and intent for trials that logged
   ``alpha``, ``beta:NAME`` or ``belief:NAME``, columns :data:`STEP_COLUMNS`;
@@ -24,7 +24,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from casa_core import metrics, tasks
+from casa_core.analysis import metrics
+from casa_core.assist import tasks
 from casa_core.io import CONDITION_KEYS, FileCheck, Problem, check_paths
 from casa_core.io.atomic import atomic_paths, frame_to_csv_text, write_csv
 from casa_core.io.contract import INTENT_PREFIXES
@@ -56,7 +57,7 @@ TRIAL_COLUMNS = (
     "preset",
     "evidence",
     # Whether the trial ran to its time limit (empty when its log does not say the
-    # limit) and whether it ended where the task intends (casa_core.metrics).
+    # limit) and whether it ended where the task intends (casa_core.analysis.metrics).
     "timed_out",
     "success",
 )
@@ -277,33 +278,6 @@ def _likert(checks: list[FileCheck], trials: pd.DataFrame, dataset: str) -> pd.D
         return pd.DataFrame(columns=list(LIKERT_COLUMNS))
     likert = pd.concat(parts, ignore_index=True)[list(LIKERT_COLUMNS)]
     return likert.sort_values([*CONDITION_KEYS, "question"], kind="stable").reset_index(drop=True)
-
-
-def read_table(path: Path | str) -> pd.DataFrame:
-    """Read a processed table (trials, steps, likert, validation) with its values intact.
-
-    pandas' defaults would read the method ``"NA"`` as missing and a participant
-    ``"007"`` as the number 7; here only empty cells are missing and identifying
-    columns stay text.
-
-    Parameters
-    ----------
-    path : path or file-like
-        A CSV written by :func:`write_tables` or :func:`write_validation`.
-
-    Returns
-    -------
-    pandas.DataFrame
-
-    Examples
-    --------
-    >>> import io
-    >>> table = read_table(io.StringIO("participant,method,score\\n007,NA,5\\n008,,\\n"))
-    >>> table["participant"].tolist(), table["method"].tolist()
-    (['007', '008'], ['NA', nan])
-    """
-    text_columns = {c: str for c in ("dataset", "participant", "trial", "intent", "file")}
-    return pd.read_csv(path, dtype=text_columns, keep_default_na=False, na_values=[""])
 
 
 def write_tables(tables: DatasetTables, out_dir: Path | str) -> list[Path]:

@@ -9,7 +9,7 @@ For a trial logged at ticks ``t_0 < ... < t_{n-1}`` with end-effector positions
   both are compared at the same seconds since the start,
   ``s_j = j * dt`` for ``j = 0 .. ceil(max(T, T*) / dt)``, with ``dt`` the
   control tick, ``T`` the trial's last tick and ``T*`` the end of the intended
-  trajectory (:func:`casa_core.tasks.intended_trajectory`). Each trajectory is
+  trajectory (:func:`casa_core.assist.tasks.intended_trajectory`). Each trajectory is
   linearly interpolated between its samples and holds its first / last pose
   outside them: the reference waits at its goal while a slow participant
   finishes, and an executed trajectory that stops early is compared, standing
@@ -59,6 +59,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from casa_core.defaults import POUR_TILT_TOLERANCE, SUCCESS_RADIUS
 from casa_core.vocabulary import PHASES, condition_of
 
 #: The condition whose effort is the reference of relative effort, and its method.
@@ -68,18 +69,6 @@ REFERENCE_CONDITION = REFERENCE_METHOD = "NA"
 REFERENCE_PHASES = tuple(
     phase for phase in PHASES if condition_of(REFERENCE_METHOD, phase) == REFERENCE_CONDITION
 )
-
-
-#: How close (m) the last position must be to the intended trajectory's end for success:
-#: 5 cm, the radius of the pouring target drawn in the scene, well inside the bowl's 7 cm
-#: rim (a pour from there lands in the bowl), and far below the 22 cm between the two
-#: nearest ends of different tasks (the green goal and the pouring position), so a
-#: trial that stops at another task's end never succeeds.
-SUCCESS_RADIUS = 0.05
-#: How close (rad) the pour's last rotation must be to the intended tilt (scene
-#: ``pouring.tilt``, 1.8 rad = 103 deg) for success: 0.2 rad keeps the cup past
-#: horizontal (at least 1.6 rad = 92 deg), where it pours out.
-POUR_TILT_TOLERANCE = 0.2
 
 
 def trajectory_error(

@@ -93,7 +93,7 @@ class LibraryEntry:
     path : Path
         Its file.
     intent : NeuralIntent
-        The intent, ready for an :class:`casa_core.assistant.Assistant`.
+        The intent, ready for an :class:`casa_core.assist.assistant.Assistant`.
     metadata : dict
         Every key of the file but ``weights`` and ``checksum``.
     """

@@ -2,9 +2,10 @@
 
 The config's ``power`` block names the numbers of participants (``sizes``), the
 replicate studies per variant (``replicates``) and the robustness variants
-(``variants``, :mod:`casa_core.variants`). Replicate ``r`` (1-based) of a variant is the
-variant's simulated study with :func:`replicate_seed` as ``simulation.seed`` and as many
-participants as the largest N: every random draw of the study comes from that seed, so
+(``variants``, :mod:`casa_core.experiments.robustness`). Replicate ``r`` (1-based) of a
+variant is the variant's simulated study with :func:`replicate_seed` as
+``simulation.seed`` and as many participants as the largest N: every random draw of the
+study comes from that seed, so
 each replicate has its own participants, and replicate ``r`` of two variants has the
 same ones (variants are compared on the same simulated people). Its study of N is its
 first N participants: the protocol counterbalances by participant number, so these are
@@ -27,6 +28,8 @@ import copy
 from collections.abc import Mapping
 
 import numpy as np
+
+from casa_core.experiments.robustness import variant_config
 
 #: A constant of the seed derivation, so that replicate seeds are not other draws of
 #: the config seed's streams (``default_rng([seed, participant, stream])``).
@@ -75,31 +78,11 @@ def power_variants(config: Mapping) -> list[str]:
     return list(config["power"]["variants"])
 
 
-def power_problems(config: Mapping) -> list[str]:
-    """``key: rule`` for every ``power.variants`` name that is not a robustness variant.
-
-    Examples
-    --------
-    >>> power_problems({"power": {"variants": ["x"]}, "robustness": {"variants": {"default": {}}}})
-    ['power.variants: x is not a variant of robustness.variants (variants: default)']
-    """
-    known = (config.get("robustness") or {}).get("variants") or {}
-    names = (config.get("power") or {}).get("variants") or []
-    return [
-        f"power.variants: {name} is not a variant of robustness.variants "
-        f"(variants: {', '.join(known)})"
-        for name in names
-        if name not in known
-    ]
-
-
 def power_variant_config(config: Mapping, variant: str) -> dict:
     """The whole config of ``variant`` for the power target: as many participants as the
-    largest N (:func:`casa_core.variants.variant_config`, which leaves out the ``power``
-    block, so that the replicates' configs change only with what their jobs read).
+    largest N (:func:`casa_core.experiments.robustness.variant_config`, which leaves out the
+    ``power`` block, so that the replicates' configs change only with what their jobs read).
     """
-    from casa_core.variants import variant_config
-
     return variant_config(config, variant, participants=max(power_sizes(config)))
 
 

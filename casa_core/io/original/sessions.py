@@ -3,7 +3,7 @@
 The authors' original implementation (Python 2, on the real JACO) wrote one NumPy
 ``.npz`` per trial. :func:`read_session` loads one and checks every array it uses;
 :func:`convert_session` turns it into a casa-trial/1 metadata dict and time series.
-:mod:`casa_core.original_import` does this for a folder of them (``casa import
+:mod:`casa_core.io.original.importer` does this for a folder of them (``casa import
 original``). The format and the rules are ``docs/data-contracts.md`` ("Importing the
 original implementation's sessions"); in short:
 

@@ -32,6 +32,9 @@ from dataclasses import dataclass
 from datetime import timedelta
 from pathlib import Path
 
+from casa_core.experiments.power import power_sizes, power_variants
+from casa_core.experiments.robustness import variant_names
+
 #: Where the jobs' benchmark files go, one folder per target (workflow/rules/*.smk).
 BENCHMARKS = Path("benchmarks")
 #: Where each unit's config is written: INTERIM / target / unit / "config.yaml".
@@ -166,15 +169,13 @@ def target_units(config: Mapping, target: str) -> dict[str, tuple[str, ...]]:
     >>> len(target_units(load_config(DEFAULT_CONFIG), "robustness")["paper"])  # 11 and 4
     15
     """
-    from casa_core import power, variants
-
     if target == "power":
-        jobs = participant_jobs(max(power.power_sizes(config))) + REPLICATE_JOBS
+        jobs = participant_jobs(max(power_sizes(config))) + REPLICATE_JOBS
         replicates = range(1, config["power"]["replicates"] + 1)
-        return {f"{v}/r{r}": jobs for v in power.power_variants(config) for r in replicates}
+        return {f"{v}/r{r}": jobs for v in power_variants(config) for r in replicates}
     if target == "robustness":
         jobs = participant_jobs(config["robustness"]["participants"]) + VARIANT_JOBS
-        return {name: jobs for name in variants.variant_names(config)}
+        return {name: jobs for name in variant_names(config)}
     raise ValueError(f"progress: no target {target!r} (targets: {', '.join(UNIT_WORDS)})")
 
 

@@ -36,14 +36,14 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from casa_core.assistant import Assistant
-from casa_core.bench_protocol import TARGETS, participant_benchmark, target_met
-from casa_core.intents import GoalIntent
+from casa_core.assist.assistant import Assistant
+from casa_core.assist.intents import GoalIntent
+from casa_core.assist.tasks import intended_trajectory, task_waypoints
+from casa_core.bench.protocol import TARGETS, participant_benchmark, target_met
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import REQUIRED_GOALS, Scene
 from casa_core.study.closed_loop import run_trial
 from casa_core.study.key_sources import WaypointKeys
-from casa_core.tasks import intended_trajectory, task_waypoints
 
 #: Numbers of goal intents of the scaling measurement.
 SCALING_SIZES = (2, 4, 8, 16, 32, 64)
@@ -230,7 +230,7 @@ def format_table(results: dict) -> str:
         [row["n_intents"] for row in fitted], [row["step_us"] for row in fitted]
     )
     lines = [
-        "CPU time of one thread/process (see casa_core.bench)",
+        "CPU time of one thread/process (see casa_core.bench.suite)",
         f"{'measure':<44}{'value':>14}  target",
         _row("assistance step, 3 goal intents (us)", results, "step_us_goal3"),
         _row("assistance step, + 1 neural intent (us)", results, "step_us_neural1"),
@@ -373,13 +373,13 @@ def run_benchmarks(
     scene: Scene, *, seed: int = 0, config: dict | None = None, participants=(0, 1, 2)
 ) -> dict:
     """Every benchmark: :func:`assistance_benchmarks`, :func:`trial_realtime_factor` and,
-    with a workflow ``config``, :func:`~casa_core.bench_protocol.participant_benchmark`.
+    with a workflow ``config``, :func:`~casa_core.bench.protocol.participant_benchmark`.
 
     Returns the dict :func:`format_table` prints: ``step_us_goal3``,
     ``step_us_neural1``, ``scaling``, ``trial_realtime_factor`` (per CPU second),
     ``trial_realtime_factor_wall``, ``trial_realtime_factor_new_sim``; with a config
     ``participant_cpu_s`` and ``irl_s`` (and their ``_all`` lists); and
-    ``targets_met``: per key of :data:`~casa_core.bench_protocol.TARGETS`, whether
+    ``targets_met``: per key of :data:`~casa_core.bench.protocol.TARGETS`, whether
     its target is met (None if not measured).
     """
     results = assistance_benchmarks(

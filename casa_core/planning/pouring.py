@@ -6,7 +6,7 @@ differentiable per-state cost and planned with :mod:`casa_core.planning`.
 
 Orientation of the cup
     The cup's axis is the end effector's x axis
-    (:func:`casa_core.rotation.end_effector_rotation`): up at rot = 0; the rotate
+    (:func:`casa_core.planning.rotation.end_effector_rotation`): up at rot = 0; the rotate
     keys turn the tool about its horizontal z axis, so the cup's tilt from upright
     is ``|rot|`` (wrapped to [0, pi]). The original implementation's "cup upright"
     feature is ``1 - (cup axis . world z)``: 0 with the cup upright, 1 on its side,
@@ -21,9 +21,9 @@ import numpy as np
 import torch
 from numba import njit
 
-from casa_core._checks import require_positive
+from casa_core.model._checks import require_positive
 from casa_core.planning import PlannedIntent, PlannerConfig
-from casa_core.rotation import R0, end_effector_rotation
+from casa_core.planning.rotation import R0, end_effector_rotation
 from casa_core.scene import Scene
 
 #: Width over which the cost's distance (m) and chords are rounded, so gradients exist at 0.

@@ -5,7 +5,7 @@ log-likelihood of a trajectory prefix given an intent with confidence beta is
 
     log P(xi_{0->t} | theta, beta) = -beta S + (t k / 2) log(beta / 2 pi),
 
-with S the intent's suboptimality (:mod:`casa_core.confidence`). Under a uniform
+with S the intent's suboptimality (:mod:`casa_core.model.confidence`). Under a uniform
 prior over intents the posterior (eq. goal_inference) normalizes these likelihoods.
 """
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casa_core._checks import as_finite_or_inf, require_positive, scalar_or_array
+from casa_core.model._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
 def log_likelihood(subopt, beta, t, k):

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casa_core._checks import as_finite_or_inf, require_positive, scalar_or_array
+from casa_core.model._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
 def suboptimality(prefix_cost, cost_to_go, optimal_cost):

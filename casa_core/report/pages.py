@@ -159,7 +159,7 @@ def table_html(frame: pd.DataFrame, *, title: str, note: str = "") -> str:
     Parameters
     ----------
     frame : pandas.DataFrame
-        The table, e.g. ``trials.csv`` read with :func:`casa_core.datasets.read_table`.
+        The table, e.g. ``trials.csv`` read with :func:`casa_core.io.read_table`.
     title : str
         The heading above it.
     note : str

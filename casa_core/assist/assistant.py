@@ -12,7 +12,7 @@ inferred: the user has full control under every arbitration. At most ``T / dt``
 steps count (the horizon's worth): past T, confidence no longer grows with time
 alone, so the verdict on the same behaviour does not depend on how long the trial
 runs. Whether a step in which the user held no key counts is the option
-``idle_is_evidence``; the presets (:mod:`casa_core.presets`) choose it.
+``idle_is_evidence``; the presets (:mod:`casa_core.assist.presets`) choose it.
 
 At every control tick :meth:`Assistant.act` blends the user's action with the robot's
 action u*, which tracks the cached optimal trajectory to theta* (replanned when theta*
@@ -25,9 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from casa_core._checks import require_positive
-from casa_core.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance, blend
-from casa_core.confidence import _beta_hat, _suboptimality
+from casa_core.assist.intents import length
 from casa_core.defaults import (
     DT,
     EPSILON,
@@ -40,8 +38,10 @@ from casa_core.defaults import (
     TICK,
     K,
 )
-from casa_core.inference import _log_likelihood, _posterior
-from casa_core.intents import length
+from casa_core.model._checks import require_positive
+from casa_core.model.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance, blend
+from casa_core.model.confidence import _beta_hat, _suboptimality
+from casa_core.model.inference import _log_likelihood, _posterior
 from casa_core.vocabulary import EVIDENCE
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
@@ -97,7 +97,7 @@ class Assistant:
         policy-blending baseline PBA (beta fixed at 1, alpha = min(1, d/D));
         "belief" arbitrates on P(theta*|xi) (with a single intent, whose belief is 1
         by construction, the user keeps full control: see
-        :func:`casa_core.arbitration.alpha_belief`); "none" is direct teleoperation (NA).
+        :func:`casa_core.model.arbitration.alpha_belief`); "none" is direct teleoperation (NA).
     k : int, default K
         Action dimensionality (7 joint velocities).
     lam : float, default LAM
@@ -146,7 +146,7 @@ class Assistant:
 
     Examples
     --------
-    >>> from casa_core.intents import GoalIntent
+    >>> from casa_core.assist.intents import GoalIntent
     >>> intents = [GoalIntent("green", [0.3, 0.4, 0.0]), GoalIntent("red", [-0.4, 0.1, 0.2])]
     >>> assistant = Assistant(intents, arbitration="confidence")
     >>> assistant.reset([0.0, 0.0, 0.0, 0.0])
@@ -348,7 +348,7 @@ class Assistant:
 
         Before the first inference step the user has full control. ``alpha``, if
         given, is the authority actually applied this tick instead of the latest
-        inference's: replaying a log (:mod:`casa_core.replay`) gives the logged one,
+        inference's: replaying a log (:mod:`casa_core.analysis.replay`) gives the logged one,
         so that the robot's share removed from the evidence is the share it had.
         """
         self._require_reset("act")

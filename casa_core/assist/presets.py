@@ -38,8 +38,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
 
+from casa_core.assist.intents import COST_FORMS
 from casa_core.defaults import COST_PER_METRE, DT, LAM, SUBOPT_SCALE
-from casa_core.intents import COST_FORMS
 from casa_core.vocabulary import EVIDENCE
 
 
@@ -51,7 +51,7 @@ class Preset:
     ----------
     name : str
     goal_cost : {"path_length", "distance_sum"}
-        Cost form of a goal intent (:class:`~casa_core.intents.GoalIntent`).
+        Cost form of a goal intent (:class:`~casa_core.assist.intents.GoalIntent`).
     goal_scale : float
         Its ``scale``: cost per metre of path, or per metre-second of distance.
     subopt_scale : float
@@ -59,7 +59,7 @@ class Preset:
     lam : float
         Rate of the exponential prior on beta.
     evidence : {"commanded", "executed"}
-        What the trajectory of inference is (:class:`~casa_core.assistant.Assistant`).
+        What the trajectory of inference is (:class:`~casa_core.assist.assistant.Assistant`).
     idle_is_evidence : bool
         Whether an inference step in which the user held no key counts as evidence.
     """
@@ -79,12 +79,12 @@ class Preset:
             raise ValueError(f"evidence must be one of {EVIDENCE}, got {self.evidence!r}")
 
     def assistant_options(self) -> dict:
-        """Keyword arguments of :class:`~casa_core.assistant.Assistant`."""
+        """Keyword arguments of :class:`~casa_core.assist.assistant.Assistant`."""
         keys = ("subopt_scale", "lam", "evidence", "idle_is_evidence")
         return {key: value for key, value in asdict(self).items() if key in keys}
 
     def goal_options(self) -> dict:
-        """Keyword arguments of :class:`~casa_core.intents.GoalIntent`."""
+        """Keyword arguments of :class:`~casa_core.assist.intents.GoalIntent`."""
         return {"cost": self.goal_cost, "scale": self.goal_scale}
 
     def with_evidence(self, evidence: str | None) -> Preset:

@@ -16,8 +16,8 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from casa_core._checks import require_positive
 from casa_core.defaults import COST_PER_METRE, DT, SPEED
+from casa_core.model._checks import require_positive
 
 COST_FORMS = ("path_length", "distance_sum")
 

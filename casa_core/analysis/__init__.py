@@ -1,0 +1,81 @@
+"""From trial logs to tables: a dataset's tables, the per-trial metrics, and replayed inference.
+
+The modules, each with one job:
+
+- :mod:`~casa_core.analysis.datasets`: One raw dataset folder in, its processed tables out.
+- :mod:`~casa_core.analysis.metrics`: The user study's objective metrics (paper, Sec. V-B),
+  per trial.
+- :mod:`~casa_core.analysis.replay`: Replay: offline inference over a recorded casa-trial/1 log.
+"""
+
+from casa_core.analysis.datasets import (
+    LIKERT_COLUMNS,
+    STEP_COLUMNS,
+    TRIAL_COLUMNS,
+    VALIDATION_COLUMNS,
+    DatasetInvalid,
+    DatasetTables,
+    build_tables,
+    check_dataset,
+    process_dataset,
+    validation_table,
+    write_tables,
+    write_validation,
+)
+from casa_core.analysis.metrics import (
+    REFERENCE_CONDITION,
+    REFERENCE_METHOD,
+    REFERENCE_PHASES,
+    efficiency_cost,
+    held_keys,
+    key_presses,
+    key_ticks,
+    relative_effort,
+    task_success,
+    timed_out,
+    trajectory_error,
+    trial_metrics,
+)
+from casa_core.analysis.replay import (
+    COLUMNS,
+    ReplayError,
+    library_files,
+    replay_differences,
+    replay_trial,
+    resolve_intents,
+    trial_settings,
+)
+
+__all__ = [
+    "COLUMNS",
+    "DatasetInvalid",
+    "DatasetTables",
+    "LIKERT_COLUMNS",
+    "REFERENCE_CONDITION",
+    "REFERENCE_METHOD",
+    "REFERENCE_PHASES",
+    "ReplayError",
+    "STEP_COLUMNS",
+    "TRIAL_COLUMNS",
+    "VALIDATION_COLUMNS",
+    "build_tables",
+    "check_dataset",
+    "efficiency_cost",
+    "held_keys",
+    "key_presses",
+    "key_ticks",
+    "library_files",
+    "process_dataset",
+    "relative_effort",
+    "replay_differences",
+    "replay_trial",
+    "resolve_intents",
+    "task_success",
+    "timed_out",
+    "trajectory_error",
+    "trial_metrics",
+    "trial_settings",
+    "validation_table",
+    "write_tables",
+    "write_validation",
+]
