@@ -45,3 +45,6 @@ SUCCESS_RADIUS = 0.05
 #: ``pouring.tilt``, 1.8 rad = 103 deg) for success: 0.2 rad keeps the cup past
 #: horizontal (at least 1.6 rad = 92 deg), where it pours out.
 POUR_TILT_TOLERANCE = 0.2
+#: The significance level of every test the pipeline judges or marks: the paper tests every
+#: hypothesis at .05.
+SIGNIFICANCE = 0.05

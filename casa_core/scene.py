@@ -30,8 +30,11 @@ import yaml
 #: The scene the package is set up with: ``config/scene.yaml`` of the repository. A path
 #: given by a user is resolved against the working directory instead.
 DEFAULT_SCENE = Path(__file__).resolve().parents[1] / "config" / "scene.yaml"
+#: The goals the robot knows from the start (paper, Sec. IV), in the original
+#: implementation's goal order.
+KNOWN_GOALS = ("green", "purple")
 #: Goals every study scene has: the two known goals and the unknown one.
-REQUIRED_GOALS = ("green", "purple", "red")
+REQUIRED_GOALS = (*KNOWN_GOALS, "red")
 
 
 class SceneError(ValueError):

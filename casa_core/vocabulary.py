@@ -47,6 +47,8 @@ TASK_PHASES = {
     "unknown_goal": ("before_learning", "demonstration", "after_learning"),
     "unknown_skill": ("before_learning", "demonstration", "after_learning"),
 }
+#: The methods in which the robot assists.
+ASSISTED_METHODS = ("PBA", "CASA")
 #: Phases run with one method only: demonstrations without assistance, CASA after learning.
 PHASE_METHOD = {"demonstration": "NA", "after_learning": "CASA"}
 #: Phases in which a participant does each condition once (repeats would be counted twice).

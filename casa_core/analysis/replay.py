@@ -49,9 +49,9 @@ from casa_core.assist.intents import GoalIntent, Intent
 from casa_core.assist.presets import DEFAULT_PRESET, Preset
 from casa_core.assist.presets import preset as named_preset
 from casa_core.defaults import DT, EPSILON
-from casa_core.io.contract import INTENT_SUFFIX
+from casa_core.io.contract import INTENT_PREFIXES, INTENT_SUFFIX
 from casa_core.robot.keys import keys_to_action, parse_keys
-from casa_core.scene import Scene
+from casa_core.scene import KNOWN_GOALS, Scene
 from casa_core.vocabulary import METHOD_ARBITRATION
 
 #: The columns of a replay table, in order.
@@ -106,7 +106,7 @@ def _participant_key(name: str) -> str:
 
 
 def library_files(library: Path | str | None, participant: str | None = None) -> list[Path]:
-    """The casa-intent/1 files a replay of ``participant``'s trials may use from ``library``.
+    """The casa-intent files a replay of ``participant``'s trials may use from ``library``.
 
     ``library`` is one ``*.intent.json`` file or a folder of them. If the folder has a
     subfolder named after the participant (``p1`` or ``p01`` for ``p01``), only the
@@ -144,7 +144,7 @@ def resolve_intents(
 ) -> list[Intent]:
     """The intents called ``names``: goals of the scene, else learned intents by name.
 
-    A goal's cost is the preset's. ``learned`` holds casa-intent/1 files (the file of
+    A goal's cost is the preset's. ``learned`` holds casa-intent files (the file of
     intent NAME is ``NAME.intent.json``, read only when NAME is needed, a fresh intent
     each time) or intents already built.
 
@@ -231,7 +231,7 @@ def replay_trial(
         The intents' names; default ``meta["intents"]``, else the known goals green and
         purple. Resolved by :func:`resolve_intents`.
     learned : sequence of path or Intent
-        Learned intents available by name (casa-intent/1 files).
+        Learned intents available by name (casa-intent files).
 
     Returns
     -------
@@ -249,7 +249,7 @@ def replay_trial(
     chosen, arbitration = trial_settings(
         meta, preset=preset, evidence=evidence, arbitration=arbitration
     )
-    names = intents if intents is not None else meta.get("intents") or ["green", "purple"]
+    names = intents if intents is not None else meta.get("intents") or list(KNOWN_GOALS)
     built = resolve_intents(list(names), scene, chosen, learned)
     teleop = scene.teleop
     per_step = int(round(DT / teleop.dt))
@@ -326,7 +326,7 @@ def replay_differences(frame: pd.DataFrame, replayed: pd.DataFrame) -> dict:
     if replayed.empty:
         return result
     logged = frame.drop_duplicates("t").set_index("t")
-    for what in ("beta", "belief"):
+    for what in INTENT_PREFIXES:
         gaps = []
         for name, rows in replayed.groupby("intent", sort=False):
             column = f"{what}:{name}"

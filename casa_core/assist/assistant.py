@@ -206,19 +206,7 @@ class Assistant:
         self.idle_is_evidence = bool(idle_is_evidence)
         self.max_evidence = int(round(horizon / dt))
         self.names = names
-        # The trial's state, set by reset(); None until then.
-        self._steps = 0
-        self._evidence = 0
-        self._user_input = False
-        self._subopt = np.zeros(len(self.intents))
-        self._last_state: np.ndarray | None = None
-        self._prefix = np.zeros(len(self.intents))
-        self._optimal = np.zeros(len(self.intents))
-        self._plan: np.ndarray | None = None
-        self._plan_intent: int | None = None
-        self._plan_origin = 0
-        self._robot_motion: np.ndarray | None = None
-        self.latest: Inference | None = None
+        self._start_trial(None)  # the trial's state, set by reset()
 
     def _require_reset(self, method: str) -> None:
         if self._last_state is None:
@@ -229,18 +217,30 @@ class Assistant:
         state = np.asarray(state, dtype=float)
         if state.ndim != 1 or not np.isfinite(state).all():
             raise ValueError(f"start state must be finite (one vector), got {state!r}")
+        self._start_trial(state)
+
+    def _start_trial(self, state: np.ndarray | None) -> None:
+        """The trial's state at ``state``, or before any trial (``state`` None)."""
+        n = len(self.intents)
         self._steps = 0
         self._evidence = 0  # inference steps that counted as evidence
         self._user_input = False  # any nonzero user action since the last step
-        self._subopt = np.zeros(len(self.intents))  # unscaled, at the last step
-        self._last_state = state
-        self._prefix = np.zeros(len(self.intents))
-        self._optimal = np.array([i.cost_to_go(state, self.horizon) for i in self.intents])
-        self._plan = None  # cached optimal trajectory to theta*, one state per step
-        self._plan_intent = None
-        self._plan_origin = 0  # inference step at which the plan starts
-        self._robot_motion = np.zeros_like(state)  # robot's share since the last step
-        self.latest = None
+        self._subopt = np.zeros(n)  # unscaled, at the last step
+        self._last_state: np.ndarray | None = state
+        self._prefix = np.zeros(n)
+        self._optimal = (
+            np.zeros(n)
+            if state is None
+            else np.array([i.cost_to_go(state, self.horizon) for i in self.intents])
+        )
+        # The cached optimal trajectory to theta*, one state per step, from inference step
+        # _plan_origin on.
+        self._plan: np.ndarray | None = None
+        self._plan_intent: int | None = None
+        self._plan_origin = 0
+        # The robot's share of the motion since the last step.
+        self._robot_motion: np.ndarray | None = None if state is None else np.zeros_like(state)
+        self.latest: Inference | None = None
 
     def update(self, state, *, user_input: bool | None = None) -> Inference:
         """Observe the state reached one inference step (``dt``) after the last one.

@@ -48,7 +48,7 @@ def _add_teleop(commands) -> None:
         action="append",
         default=[],
         metavar="FILE",
-        help="a learned intent (casa-intent/1 file) the robot also knows; repeatable "
+        help="a learned intent (casa-intent file) the robot also knows; repeatable "
         "(for the after_learning phase)",
     )
     command.add_argument(

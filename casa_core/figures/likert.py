@@ -14,9 +14,11 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from casa_core.defaults import SIGNIFICANCE
 from casa_core.figures import _bars, style
-from casa_core.figures.objective import SIGNIFICANCE, parse_comparison, stars
+from casa_core.figures.objective import parse_comparison, stars
 from casa_core.io import tables
+from casa_core.io.contract import SURVEY_COLUMNS
 from casa_core.stats.study import answered_by_model
 from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
 
@@ -33,9 +35,7 @@ def prepare_likert(likert: pd.DataFrame) -> pd.DataFrame:
     ValueError
         Naming the row, if a question is unknown or a score is not an integer 1-7.
     """
-    tables.require_columns(
-        likert, ["participant", "task", "method", "phase", "question", "score"], "likert"
-    )
+    tables.require_columns(likert, SURVEY_COLUMNS, "likert")
     rows = likert[likert["task"].isin(list(style.SHOWN_TASKS))].copy()
     scores = pd.to_numeric(rows["score"], errors="coerce")
     conditions = []

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from casa_core.defaults import POUR_TILT_TOLERANCE, SUCCESS_RADIUS
+from casa_core.defaults import POUR_TILT_TOLERANCE, SIGNIFICANCE, SUCCESS_RADIUS
 from casa_core.figures import _bars, style
 from casa_core.io import tables
 from casa_core.vocabulary import (
@@ -54,8 +54,6 @@ TIMED_OUT, SUCCESS = "timed_out", "success"
 SUCCESS_AXIS = "Success (share of trials)"
 #: The legend's words for a trial that ran out of time.
 TIMED_OUT_LABEL = "ran out of time"
-
-SIGNIFICANCE = 0.05
 
 
 def stars(p: float) -> str:

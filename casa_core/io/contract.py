@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 
+from casa_core.defaults import TICK
 from casa_core.vocabulary import (
     KEYS,
     METHODS,
@@ -78,6 +79,10 @@ INTENT_SUFFIX = ".intent.json"
 #: Metadata keys every trial has, and the ones it may have.
 META_REQUIRED = ("schema", "participant", "task", "method", "phase", "source")
 META_OPTIONAL = ("intents", "seed", "started_at", "notes", "max_duration", "inference")
+#: A trial's two files: ``<stem>.json`` (its metadata) and ``<stem>.csv`` (its ticks).
+TRIAL_SUFFIXES = (".json", ".csv")
+#: A dataset's own scene: this file at the dataset's top level (docs/data-contracts.md).
+SCENE_NAME = "scene.yaml"
 #: The keys that name a participant's condition (a trial, or a survey answer's subject).
 CONDITION_KEYS = ("participant", "task", "method", "phase")
 #: Metadata keys whose value is one of a fixed set, in the order they are checked.
@@ -106,9 +111,8 @@ COLUMN_RANGES = {
 }
 #: Bounds of ``t`` (s): a trial starts at or after 0 and lasts less than an hour.
 TIME_RANGE = (0.0, 3600.0)
-#: The control tick (s) of casa-trial/1 (20 Hz, the scene's ``teleop.dt``) and the relative
-#: tolerance on the step between two rows.
-TICK = 0.05
+#: The relative tolerance on the step between two rows, around the control tick (20 Hz,
+#: the scene's ``teleop.dt``).
 TICK_TOLERANCE = 0.1
 #: The beliefs of a row sum to 1 within this.
 BELIEF_SUM_TOLERANCE = 1e-6

@@ -24,14 +24,16 @@ from pathlib import Path
 
 import pandas as pd
 
-from casa_core.io.contract import CONDITION_KEYS, SINGLE_TRIAL_PHASES, SURVEYS_NAME
+from casa_core.io.contract import (
+    CONDITION_KEYS,
+    SCENE_NAME,
+    SINGLE_TRIAL_PHASES,
+    SURVEYS_NAME,
+    TRIAL_SUFFIXES,
+)
 from casa_core.io.trial_log import inside, load_surveys, load_trial, trial_files, trial_stem
 from casa_core.io.validation import Problem
 from casa_core.scene import SceneError, load_scene
-
-_LOG_SUFFIXES = (".csv", ".json")
-#: A dataset's own scene: this file at the dataset's top level (docs/data-contracts.md).
-SCENE_NAME = "scene.yaml"
 
 
 @dataclass
@@ -244,9 +246,9 @@ def _classify(path: Path, root: Path | None) -> str | FileCheck:
     if path.name.lower() == SURVEYS_NAME:
         message = f"Likert answers are read only from files named exactly {SURVEYS_NAME!r}"
         return FileCheck(path, "other", [Problem(name, "", "surveys-name", message)])
-    if path.suffix in _LOG_SUFFIXES:
+    if path.suffix in TRIAL_SUFFIXES:
         return "trial"
-    if path.suffix.lower() in _LOG_SUFFIXES:
+    if path.suffix.lower() in TRIAL_SUFFIXES:
         message = (
             f"looks like a log but its suffix is not lower case: rename it to "
             f"{path.stem + path.suffix.lower()!r}"
@@ -343,7 +345,7 @@ def check_paths(paths: Iterable[Path | str]) -> list[FileCheck]:
             found, links = _walk(path)
             files += [(f, path) for f in found]
             problems += links
-            if not any(f.suffix.lower() in _LOG_SUFFIXES for f in found):
+            if not any(f.suffix.lower() in TRIAL_SUFFIXES for f in found):
                 missing = Problem(str(path), "", "non-empty", "no trial logs or surveys found")
                 problems.append(FileCheck(path, "folder", [missing]))
         elif path.is_file() or path.is_symlink():

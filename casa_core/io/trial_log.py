@@ -30,7 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 from casa_core.io.atomic import atomic_write_text, frame_to_csv_text
-from casa_core.io.contract import SCHEMA, SURVEYS_NAME
+from casa_core.io.contract import SCHEMA, SURVEYS_NAME, TRIAL_SUFFIXES
 from casa_core.io.problems import errors
 from casa_core.io.validation import (
     LogError,
@@ -39,8 +39,6 @@ from casa_core.io.validation import (
     parse_surveys_csv,
     parse_trial_csv,
 )
-
-_TRIAL_SUFFIXES = (".csv", ".json")
 
 
 def trial_stem(path: Path | str) -> Path:
@@ -52,7 +50,7 @@ def trial_stem(path: Path | str) -> Path:
     ('p01/trial.1', 'p01/trial.1')
     """
     path = Path(path)
-    return path.with_suffix("") if path.suffix in _TRIAL_SUFFIXES else path
+    return path.with_suffix("") if path.suffix in TRIAL_SUFFIXES else path
 
 
 def trial_files(path: Path | str) -> tuple[Path, Path]:

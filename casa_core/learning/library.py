@@ -6,7 +6,8 @@ and what a reader needs to trust and reuse them: name, task, participant, input
 features, scene objects, seed, SHA-256 hashes of the demonstrations, the IRL
 settings and the training history.
 
-Format ``casa-intent/1``: a JSON object with the keys of :data:`REQUIRED_KEYS`.
+Format ``casa-intent``, version :data:`VERSION`: a JSON object with the keys of
+:data:`REQUIRED_KEYS`.
 The weights are stored per parameter as shape, dtype and base64 of the
 little-endian bytes, so the file is plain text and self-describing. The key
 ``checksum`` is the SHA-256 of the canonical JSON (sorted keys, no spaces) of

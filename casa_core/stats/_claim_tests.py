@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from casa_core.defaults import SIGNIFICANCE
 from casa_core.io.tables import numeric_column, require_columns
 from casa_core.stats.apa import p_value
 from casa_core.stats.study import POOLED, _conditions, _prepare_trials
@@ -24,8 +25,6 @@ from casa_core.vocabulary import (
     UNKNOWN_TASKS,
 )
 
-#: The paper tests every hypothesis at .05.
-SIGNIFICANCE = 0.05
 #: The hypotheses' words: "more accurate, efficient, and effortless" (lower is better).
 METRICS = ("error", "efficiency", "relative_effort")
 #: Non-inferiority bounds the paper reports for relative effort (Sec. V-B), used as the

@@ -18,6 +18,9 @@ import pandas as pd
 
 from casa_core.io.tables import numeric_column, require_columns
 
+#: Relative size below which a sum of squares counts as zero (floating-point noise).
+ZERO_SS = 1e-12
+
 
 class Skipped(Exception):
     """Raised inside an analysis when the data cannot support the test; the message says why."""
@@ -121,3 +124,8 @@ def require_more_participants(frame, factors, terms, n: int) -> None:
                 f"needs more participants with every condition than the {df} degrees of "
                 f"freedom of {term!r} (sphericity), got {n}"
             )
+
+
+def as_list(factors: str | Sequence[str]) -> list[str]:
+    """One factor name or several, as a list."""
+    return [factors] if isinstance(factors, str) else list(factors)

@@ -20,6 +20,7 @@ from scipy import stats
 from statsmodels.stats.anova import anova_lm
 
 from casa_core.stats._tables import (
+    ZERO_SS,
     Skipped,
     clean,
     equal_to_rounding,
@@ -31,9 +32,6 @@ from casa_core.stats.noninferiority import NONINFERIORITY_COLUMNS, non_inferiori
 
 ANOVA_COLUMNS = ["term", "F", "df1", "df2", "p", "np2", "n"]
 TUKEY_COLUMNS = ["A", "B", "diff", "p", "ci_low", "ci_high", "n_A", "n_B"]
-
-# Relative size below which a sum of squares counts as zero (floating-point noise).
-_ZERO_SS = 1e-12
 
 
 def anova(data: pd.DataFrame, dv: str, between: str | Sequence[str]) -> pd.DataFrame:
@@ -136,7 +134,7 @@ def _fit_linear_model(frame, dv, factors, covariate) -> pd.DataFrame:
     fit = smf.ols("y ~ " + " + ".join(parts), data=model_frame).fit()
     if fit.df_resid < 1:
         raise Skipped(f"no residual degrees of freedom ({len(y)} observations)")
-    if fit.ssr <= _ZERO_SS * total_ss:
+    if fit.ssr <= ZERO_SS * total_ss:
         raise Skipped("zero residual variance: F is undefined")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)

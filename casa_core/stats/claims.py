@@ -16,6 +16,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from casa_core.io.contract import CONDITION_KEYS
 from casa_core.io.tables import numeric_columns, require_columns
 from casa_core.stats import _claim_tests as tests
 from casa_core.stats.study import answered_by_model
@@ -62,7 +63,6 @@ STATEMENTS = {
     "what they want, feel less interaction effort, and find the assistance more useful "
     'with CASA after learning than with any other baseline."',
 }
-STEP_KEYS = ["participant", "task", "method", "phase"]
 
 
 def _share_verdict(hits: int, total: int) -> str:
@@ -112,21 +112,21 @@ def trial_outcomes(steps: pd.DataFrame) -> pd.DataFrame:
        min_alpha    top  top_beta  beta:purple
     0        0.4  green       2.5          0.3
     """
-    require_columns(steps, [*STEP_KEYS, "t", "alpha", "intent", "beta"], "steps table")
+    require_columns(steps, [*CONDITION_KEYS, "t", "alpha", "intent", "beta"], "steps table")
     frame = numeric_columns(steps, ["t", "alpha", "beta"], "steps table")
     if "trial" not in frame.columns:
-        frame["trial"] = frame[STEP_KEYS].astype(str).agg("/".join, axis=1)
+        frame["trial"] = frame[list(CONDITION_KEYS)].astype(str).agg("/".join, axis=1)
     rows = []
     for trial, part in frame.groupby("trial", sort=True):
         last = part[part["t"] == part["t"].max()].dropna(subset=["beta"])
         betas = last.groupby("intent")["beta"].max().sort_values(ascending=False)
         tied = len(betas) > 1 and betas.iloc[0] == betas.iloc[1]
-        row = {key: part[key].iloc[0] for key in STEP_KEYS} | {"trial": trial}
+        row = {key: part[key].iloc[0] for key in CONDITION_KEYS} | {"trial": trial}
         row |= {"min_alpha": float(part["alpha"].min())}
         row |= {"top": "" if betas.empty or tied else betas.index[0]}
         row |= {"top_beta": float(betas.iloc[0]) if len(betas) else np.nan}
         rows.append(row | {f"beta:{name}": float(value) for name, value in betas.items()})
-    columns = [*STEP_KEYS, "trial", "min_alpha", "top", "top_beta"]
+    columns = [*CONDITION_KEYS, "trial", "min_alpha", "top", "top_beta"]
     return pd.DataFrame(rows, columns=None if rows else columns)
 
 

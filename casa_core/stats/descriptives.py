@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from casa_core.io.contract import CONDITION_KEYS
 from casa_core.io.tables import require_columns
 from casa_core.stats.study import CONDITION_ORDER, METRICS, _prepare_trials
 from casa_core.vocabulary import TASK_LABELS
@@ -92,7 +93,7 @@ def data_lines(trials: pd.DataFrame) -> list[str]:
     <BLANKLINE>
     The data are simulated (source: simulated): 2 simulated participants. ...
     """
-    require_columns(trials, ["participant", "task", "method", "phase"], "trials table")
+    require_columns(trials, CONDITION_KEYS, "trials table")
     n = trials["participant"].astype(str).nunique()
     sources = sorted(set(trials["source"].dropna().astype(str))) if "source" in trials else []
     if sources == ["simulated"]:

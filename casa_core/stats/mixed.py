@@ -18,16 +18,19 @@ import pandas as pd
 import statsmodels.formula.api as smf
 from scipy import stats
 
-from casa_core.stats._tables import Skipped, clean, levels, require_representable, skipped_row
+from casa_core.stats._tables import (
+    Skipped,
+    as_list,
+    clean,
+    levels,
+    require_representable,
+    skipped_row,
+)
 
 MIXED_COLUMNS = ["term", "chi2", "df1", "p", "n", "n_groups"]
 #: Random-intercept variance over residual variance below which the fit is at the
 #: boundary: scale-free, so the same for errors in metres and efforts in key presses.
 BOUNDARY_RATIO = 1e-4
-
-
-def _as_list(factors: str | Sequence[str]) -> list[str]:
-    return [factors] if isinstance(factors, str) else list(factors)
 
 
 def _fit_ml(formula: str, frame: pd.DataFrame) -> tuple[float, bool, float]:
@@ -103,7 +106,7 @@ def mixedlm(
             term  chi2  df1   n
     0  condition  31.8  2.0  12
     """
-    factors = _as_list(fixed)
+    factors = as_list(fixed)
     if not 1 <= len(factors) <= 2:
         raise ValueError(f"mixedlm: fixed must name 1 or 2 factors, got {factors}")
     terms = [*factors, *([" x ".join(factors)] if interaction and len(factors) == 2 else [])]

@@ -18,11 +18,10 @@ import statsmodels.formula.api as smf
 from scipy import stats
 
 from casa_core.stats import _tables
-from casa_core.stats._tables import Skipped
+from casa_core.stats._tables import ZERO_SS, Skipped
+from casa_core.stats.between import ANOVA_COLUMNS
 
 CONTRAST_COLUMNS = ["A", "B", "diff", "se", "df", "t", "p", "ci_low", "ci_high", "n_A", "n_B"]
-INTERACTION_COLUMNS = ["term", "F", "df1", "df2", "p", "np2", "n"]
-_ZERO_SS = 1e-12
 
 
 def _model_frame(data, dv, between, covariate, what) -> pd.DataFrame:
@@ -49,7 +48,7 @@ def _fit(model_frame: pd.DataFrame, formula: str):
     if fit.df_resid < 1:
         raise Skipped(f"no residual degrees of freedom ({len(model_frame)} observations)")
     total = float(np.sum((model_frame["y"] - model_frame["y"].mean()) ** 2))
-    if fit.ssr <= _ZERO_SS * total:
+    if fit.ssr <= ZERO_SS * total:
         raise Skipped("zero residual variance: the test is undefined")
     return fit
 
@@ -185,7 +184,7 @@ def interaction(data: pd.DataFrame, dv: str, between: str, covariate: str) -> pd
             raise Skipped("the interaction is not estimable (each method seen in one task only)")
         f_value, p, _ = full.compare_f_test(additive)
     except Skipped as why:
-        return _tables.skipped_row(INTERACTION_COLUMNS, str(why), term=term)
+        return _tables.skipped_row(ANOVA_COLUMNS, str(why), term=term)
     ss = float(additive.ssr - full.ssr)
     row = {
         "term": term,
@@ -197,7 +196,7 @@ def interaction(data: pd.DataFrame, dv: str, between: str, covariate: str) -> pd
         "n": len(model_frame),
         "note": f"from the model {dv} ~ {between} * {covariate}",
     }
-    return pd.DataFrame([row], columns=[*INTERACTION_COLUMNS, "note"])
+    return pd.DataFrame([row], columns=[*ANOVA_COLUMNS, "note"])
 
 
 __all__ = ["interaction", "model_contrasts"]

@@ -19,6 +19,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from casa_core.io.contract import CONDITION_KEYS, SURVEY_COLUMNS
 from casa_core.io.tables import numeric_column, require_columns
 from casa_core.stats import between, posthoc, within
 from casa_core.stats._rows import STATS_COLUMNS, Rows
@@ -49,8 +50,6 @@ ONE_SAMPLE_NOTE = (
 POOLED = "+".join(UNKNOWN_TASKS)
 #: Level order: the CASA family first, so Tukey pairs and comparisons read "CASA vs NA".
 CONDITION_ORDER = sorted(CONDITIONS, key=lambda c: not c.startswith("CASA"))
-TRIAL_KEYS = ["participant", "task", "method", "phase"]
-LIKERT_KEYS = [*TRIAL_KEYS, "question", "score"]
 ALPHA = 0.05
 #: Appended to the note of every H4 row computed from a model's answers.
 MODEL_OUTPUT_NOTE = "answers are model output (simulated participants), not people's ratings"
@@ -94,7 +93,7 @@ def _condition(method, phase, row, what: str) -> str | None:
 
 def _conditions(table: pd.DataFrame, what: str) -> pd.DataFrame:
     """``table`` with ``method`` replaced by the condition label, unanalysed phases dropped."""
-    require_columns(table, TRIAL_KEYS, what)
+    require_columns(table, CONDITION_KEYS, what)
     out = table.copy()
     labels = [
         _condition(method, phase, row, what)
@@ -360,7 +359,7 @@ def analyze_study(
 
 
 def _prepare_trials(trials: pd.DataFrame, metrics: list[str]) -> dict[str, pd.DataFrame]:
-    require_columns(trials, [*TRIAL_KEYS, *metrics], "trials table")
+    require_columns(trials, [*CONDITION_KEYS, *metrics], "trials table")
     frame = _conditions(trials, "trials table")
     for metric in metrics:
         frame[metric] = numeric_column(frame, metric, "trials table")
@@ -373,7 +372,7 @@ def _prepare_trials(trials: pd.DataFrame, metrics: list[str]) -> dict[str, pd.Da
 
 
 def _subjective(out: Rows, likert: pd.DataFrame) -> None:
-    require_columns(likert, LIKERT_KEYS, "likert table")
+    require_columns(likert, SURVEY_COLUMNS, "likert table")
     frame = _conditions(likert, "likert table")
     frame["score"] = numeric_column(frame, "score", "likert table")
     questions = sorted(frame["question"].dropna().unique(), key=str)

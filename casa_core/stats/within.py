@@ -24,6 +24,7 @@ import pingouin
 
 from casa_core.stats._tables import (
     Skipped,
+    as_list,
     clean,
     complete_cells,
     equal_to_rounding,
@@ -37,10 +38,6 @@ from casa_core.stats.mixed import mixedlm
 from casa_core.stats.ranks import friedman, holm, wilcoxon_holm
 
 RM_COLUMNS = ["term", "F", "df1", "df2", "p", "p_gg", "eps", "W_spher", "p_spher", "ng2", "n"]
-
-
-def _as_list(factors: str | Sequence[str]) -> list[str]:
-    return [factors] if isinstance(factors, str) else list(factors)
 
 
 _DV = "__dv__"
@@ -83,7 +80,7 @@ def rm_anova(
             term       F  df1  df2   p_gg   eps  p_spher
     0  condition  79.605  2.0  6.0  0.002  0.57    0.247
     """
-    factors = _as_list(within)
+    factors = as_list(within)
     if not 1 <= len(factors) <= 2:
         raise ValueError(f"rm_anova: within must name 1 or 2 factors, got {factors}")
     frame = clean(data, dv, [*factors, subject], "rm_anova")

@@ -31,15 +31,13 @@ from casa_core.defaults import DT
 from casa_core.io import write_trial
 from casa_core.robot.keys import check_keys, format_keys, keys_to_action
 from casa_core.robot.sim import ArmSimulation
-from casa_core.scene import Scene
+from casa_core.scene import KNOWN_GOALS, Scene
 from casa_core.study.key_sources import KeySource
 from casa_core.vocabulary import METHOD_ARBITRATION as LOGGED_ARBITRATION
 from casa_core.vocabulary import METHODS, TASK_PHASES
 
 #: Every method's arbitration, and BELIEF's (the arbitration analysis only).
 METHOD_ARBITRATION = {**LOGGED_ARBITRATION, "BELIEF": "belief"}
-#: The goals the robot knows from the start (paper, Sec. IV).
-KNOWN_GOALS = ("green", "purple")
 
 
 @dataclass
@@ -80,7 +78,7 @@ def known_goal_intents(scene: Scene, names: Sequence[str] = KNOWN_GOALS, **optio
 def trial_intents(
     scene: Scene, learned: Sequence[Path | str] = (), *, inference: Preset | str = DEFAULT_PRESET
 ) -> list:
-    """What the robot knows: the known goals, then each learned intent file (casa-intent/1).
+    """What the robot knows: the known goals, then each learned intent file (casa-intent).
 
     The goals' cost is the one of the ``inference`` preset (:mod:`casa_core.assist.presets`).
 

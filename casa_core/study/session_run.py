@@ -22,7 +22,7 @@ from casa_core.assist.tasks import intended_trajectory
 from casa_core.defaults import HORIZON
 from casa_core.io import SCHEMA, check_meta
 from casa_core.io.atomic import atomic_write_text
-from casa_core.io.folders import SCENE_NAME
+from casa_core.io.contract import SCENE_NAME, TRIAL_SUFFIXES
 from casa_core.robot.screens import SLOW, SessionWindow, WindowClosed
 from casa_core.scene import Scene, load_scene
 from casa_core.study import session_texts as texts
@@ -135,7 +135,7 @@ def _remove_halves(record: SessionRecord, log: SessionLog) -> None:
         if step.kind != "trial":
             continue
         stem = record.stem(step.spec)
-        halves = [stem.with_suffix(s) for s in (".json", ".csv") if stem.with_suffix(s).is_file()]
+        halves = [stem.with_suffix(s) for s in TRIAL_SUFFIXES if stem.with_suffix(s).is_file()]
         if len(halves) == 1:
             halves[0].unlink()
             log(f"removed {halves[0].name}, the half of an unfinished log; the trial runs again")

@@ -16,6 +16,7 @@ from pathlib import Path
 from casa_core.assist.presets import DEFAULT_PRESET, Preset
 from casa_core.defaults import DEMONSTRATIONS, EPSILON
 from casa_core.io import SCHEMA, check_meta, read_trial
+from casa_core.io.contract import TRIAL_SUFFIXES
 from casa_core.robot.sim import ArmSimulation
 from casa_core.robot.teleop import KeyboardKeys, Window
 from casa_core.scene import Scene
@@ -95,7 +96,7 @@ def run_teleop(
     problems = check_meta({**planned, "phase": phase, "source": source_kind}, f"{stem}.json")
     if problems:
         raise ValueError("cannot run this trial: " + "; ".join(str(x) for x in problems))
-    for suffix in (".json", ".csv"):
+    for suffix in TRIAL_SUFFIXES:
         if stem.with_suffix(suffix).exists():
             raise FileExistsError(
                 f"{stem.with_suffix(suffix)} exists; logs are never overwritten: "

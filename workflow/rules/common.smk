@@ -196,22 +196,31 @@ def operator_option(wildcards):
     return f"--operator {config['simulation']['operator']}"
 
 
-def stats_input(wildcards):
-    """The tables of the statistics; statistics left beside missing tables are removed.
+def drop_orphaned_statistics(datasets):
+    """Remove the statistics of every dataset whose tables are missing, before planning.
 
     Snakemake keeps an output whose inputs were deleted (a failed processing step
     deletes its tables), so such statistics would describe tables that are gone;
-    removed here, they are rebuilt with the tables. A dry run only says so.
+    removed here, once, they are rebuilt with the tables. A dry run only says so.
     """
-    folder = PROCESSED / wildcards.ds
-    tables = {name: folder / f"{name}.csv" for name in ("trials", "likert")}
-    if not all(path.exists() for path in tables.values()):
+    for ds in datasets:
+        folder = PROCESSED / ds
+        if all((folder / f"{name}.csv").exists() for name in ("trials", "likert")):
+            continue
         for stale in (folder / "stats.csv", folder / "stats.md"):
             if stale.exists() and workflow.dryrun:
                 print(f"{stale}: its tables are missing; a run rebuilds it", file=sys.stderr)
             elif stale.exists():
                 stale.unlink()
-    return tables
+
+
+drop_orphaned_statistics(DATASETS)
+
+
+def stats_input(wildcards):
+    """The tables of the statistics."""
+    folder = PROCESSED / wildcards.ds
+    return {name: folder / f"{name}.csv" for name in ("trials", "likert")}
 
 
 # The robustness target's modelling variants (workflow/rules/robustness.smk;
@@ -256,6 +265,8 @@ POWER_BENCHMARKS = BENCHMARKS / "power"
 POWER_SIZES = casa_power.power_sizes(config)
 POWER_PARTICIPANTS = list(range(1, max(POWER_SIZES) + 1))
 POWER_REPLICATES = list(range(1, config["power"]["replicates"] + 1))
+# Stops here if two replicates would share a seed (each seed is a hash of the study's).
+casa_power.replicate_seeds(config["simulation"]["seed"], len(POWER_REPLICATES))
 # A replicate's folder, benchmark folder (its jobs' times, for casa progress) and logs.
 REPLICATE = POWER_INTERIM / "{variant}" / "r{r}"
 REPLICATE_BENCHMARKS = POWER_BENCHMARKS / "{variant}" / "r{r}"

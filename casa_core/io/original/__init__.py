@@ -11,7 +11,6 @@ The modules, each with one job:
 from casa_core.io.original.importer import (
     METHOD_LETTERS,
     ORIGINAL_SCENE,
-    SCENE_NAME,
     TASK_NUMBERS,
     ImportResult,
     SessionName,
@@ -21,11 +20,9 @@ from casa_core.io.original.importer import (
     parse_name,
 )
 from casa_core.io.original.sessions import (
-    GOAL_NAMES,
     KEY_FRACTION,
     REFERENCE_ANGLES,
     REQUIRED_KEYS,
-    UNKNOWN_GOAL_NAME,
     Converted,
     Session,
     SessionError,
@@ -38,19 +35,16 @@ from casa_core.io.original.sessions import (
 
 __all__ = [
     "Converted",
-    "GOAL_NAMES",
     "ImportResult",
     "KEY_FRACTION",
     "METHOD_LETTERS",
     "ORIGINAL_SCENE",
     "REFERENCE_ANGLES",
     "REQUIRED_KEYS",
-    "SCENE_NAME",
     "Session",
     "SessionError",
     "SessionName",
     "TASK_NUMBERS",
-    "UNKNOWN_GOAL_NAME",
     "command_keys",
     "convert_session",
     "describe",

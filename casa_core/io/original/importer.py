@@ -28,8 +28,8 @@ from pathlib import Path
 
 from casa_core.defaults import HORIZON
 from casa_core.io import Problem, atomic_write_text, check_meta, frame_to_csv_text, write_trial
+from casa_core.io.contract import SCENE_NAME
 from casa_core.io.original.sessions import (
-    GOAL_NAMES,
     SessionError,
     convert_session,
     read_session,
@@ -38,7 +38,7 @@ from casa_core.io.original.sessions import (
 from casa_core.io.problems import errors
 from casa_core.io.trial_log import inside, trial_files
 from casa_core.io.validation import parse_trial_csv
-from casa_core.scene import DEFAULT_SCENE, load_scene
+from casa_core.scene import DEFAULT_SCENE, KNOWN_GOALS, load_scene
 from casa_core.vocabulary import LEARNED_NAMES, PHASE_METHOD, TASK_PHASES
 
 #: The scene of the original's layout, copied into every imported dataset by default.
@@ -52,8 +52,6 @@ _SKIPPED = (
     (re.compile(r"task\d+ex_data\.npz"), "a worked example run, not a participant's trial"),
     (re.compile(r"task\d+_demonstrations\.npz"), "demonstrations: joint angles without times"),
 )
-#: The file name of a dataset's own scene.
-SCENE_NAME = "scene.yaml"
 
 
 @dataclass(frozen=True)
@@ -116,9 +114,9 @@ def goal_names(name: SessionName, goals: int) -> list[str]:
     >>> goal_names(SessionName("task4c_learned", "unknown_skill", "CASA", "after_learning"), 3)
     ['green', 'purple', 'learned_pour']
     """
-    names = list(GOAL_NAMES[:goals])
+    names = list(KNOWN_GOALS[:goals])
     for index in range(len(names), goals):
-        learned = name.phase == "after_learning" and index == len(GOAL_NAMES)
+        learned = name.phase == "after_learning" and index == len(KNOWN_GOALS)
         names.append(LEARNED_NAMES[name.task] if learned else f"goal{index}")
     return names
 

@@ -48,6 +48,7 @@ from casa_core.defaults import PBA_DISTANCE, ROT_SPEED, SPEED
 from casa_core.io import JOINTS, Problem
 from casa_core.io.contract import TICK
 from casa_core.robot import kinematics as kin
+from casa_core.scene import KNOWN_GOALS
 from casa_core.vocabulary import KEYS
 
 #: The original's reference joint angles (degrees): start, its goals 0 and 1, the unknown goal.
@@ -57,10 +58,6 @@ REFERENCE_ANGLES = {
     "goal 1": (210, 130, 200, 240, 180, 172, 280),
     "unknown goal": (123, 155, 131, 284, 180, 176, 189),
 }
-#: Our names of the original's goals, in its goal order (the scene's known goals).
-GOAL_NAMES = ("green", "purple")
-#: Our name of the unknown goal of the original's layout.
-UNKNOWN_GOAL_NAME = "red"
 #: A command faster than this fraction of a key's speed counts as the key held.
 KEY_FRACTION = 0.5
 #: The arrays a session must have (the others are not read).
@@ -229,7 +226,7 @@ def _inference_arrays(check: _Checker, steps):
         arrays[key] = value
     belief, beta = arrays.get("belief_hist"), arrays.get("beta_hist")
     if belief is None:
-        belief = np.zeros((0, len(GOAL_NAMES)))
+        belief = np.zeros((0, len(KNOWN_GOALS)))
     if beta is not None and beta.shape[1] != belief.shape[1]:
         check.fail(
             "beta_hist", "shape", f"has {beta.shape[1]} goals, belief_hist {belief.shape[1]}"
@@ -371,7 +368,7 @@ def _step_alphas(session: Session, method: str, belief, beta, goal_names) -> np.
         with np.errstate(divide="ignore"):
             inverse = 1.0 / beta[np.arange(steps), likely]
         return np.clip(inverse, 0.0, 1.0)
-    known = [name for name in goal_names if name in GOAL_NAMES]
+    known = [name for name in goal_names if name in KNOWN_GOALS]
     if np.any(likely >= len(known)):
         message = f"PBA predicts a goal without a known position; known: {', '.join(known)}"
         raise SessionError([Problem(session.file, "key 'belief_hist'", "goal", message)])
