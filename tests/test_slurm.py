@@ -22,16 +22,12 @@ import pytest
 from single_node_slurm import Cluster, accounting_why_not, why_not
 from test_workflow import BIN, ENV, copy_workflow
 
-from casa_core.vocabulary import UNKNOWN_TASKS
-
 TARGETS = ("data/raw/simulated/p1/after", "figures/case_study.png")
 #: The Slurm jobs of TARGETS, by construction of the workflow's rules (study.smk,
-#: figures.smk): one participant's chain and the case study with its figure.
+#: figures.smk): one participant's protocol and the case study with its figure.
 EXPECTED_JOBS = Counter(
     {
-        "simulate_before_learning": 1,
-        "learn_intent": len(UNKNOWN_TASKS),
-        "simulate_after_learning": 1,
+        "simulated_participant": 1,
         "case_study": 1,
         "figure_case_study": 1,
     }

@@ -10,10 +10,8 @@
 ROBUST_BENCHMARKS = BENCHMARKS / "robustness"
 
 
-# Each participant's whole protocol is one job (casa simulate protocol: the files of the
-# stage commands casa simulate before, learn and after, byte for byte), so that each
-# participant pays one job's start-up.
-rule robustness_participant:
+# Each participant's protocol: the simulated study's rule (study.smk) on the variant's config.
+use rule simulated_participant as robustness_participant with:
     input:
         config=variant_config_input,
         scene=config["scene"],
@@ -41,15 +39,6 @@ rule robustness_participant:
         "logs/robustness/{variant}/p{p}_protocol.log",
     benchmark:
         ROBUST_BENCHMARKS / "{variant}" / "p{p}_protocol.tsv"
-    conda:
-        "../envs/casa.yaml"
-    params:
-        # The folder of the participant's libraries, one per unknown task.
-        library=lambda wildcards, output: Path(output.libraries[0]).parent,
-    shell:
-        "exec casa simulate protocol --config {input.config} --participant {wildcards.p} "
-        "--before {output.before} --library {params.library} --rows {output.rows} "
-        "--timing-rows {output.timings} --out {output.after} > {log} 2>&1"
 
 
 rule robustness_process:

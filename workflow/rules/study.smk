@@ -1,6 +1,5 @@
 # The simulated study (paper, Sec. V), learning, and the expert case study (Sec. IV).
-# Per participant: simulation before learning, learning of each unknown task and
-# simulation after learning are separate jobs, so that --cores 2 keeps both busy.
+# One job per participant (its whole protocol), so that --cores 2 keeps both busy.
 # The simulated study is the dataset data/raw/simulated; .complete marks it done.
 
 PARTICIPANTS = list(range(1, config["simulation"]["participants"] + 1))
@@ -13,55 +12,40 @@ wildcard_constraints:
     task="|".join(UNKNOWN_TASKS),
 
 
-rule simulate_before_learning:
+# Each participant's whole protocol is one job (casa simulate protocol: before learning,
+# learning each unknown task's intent, after learning), so that each participant pays one
+# job's start-up; the robustness and power targets run the same rule on their configs.
+rule simulated_participant:
     input:
         config=CONFIG_FILE,
         scene=config["scene"],
     output:
-        directory(SIMULATED / "p{p}" / "before"),
+        before=directory(SIMULATED / "p{p}" / "before"),
+        after=directory(SIMULATED / "p{p}" / "after"),
+        libraries=directory(
+            expand(INTENTS / "p{p}" / "{task}", task=UNKNOWN_TASKS, allow_missing=True)
+        ),
+        rows=expand(
+            PROCESSED / "simulated" / "learning" / "p{p}_{task}.csv",
+            task=UNKNOWN_TASKS,
+            allow_missing=True,
+        ),
+        timings=expand(
+            PROCESSED / "simulated" / "learning" / "p{p}_{task}_timing.csv",
+            task=UNKNOWN_TASKS,
+            allow_missing=True,
+        ),
     log:
-        "logs/simulate/p{p}_before.log",
-    conda:
-        "../envs/casa.yaml"
-    shell:
-        "exec casa simulate before --config {input.config} --participant {wildcards.p} "
-        "--out {output} > {log} 2>&1"
-
-
-rule learn_intent:
-    input:
-        before=SIMULATED / "p{p}" / "before",
-        config=CONFIG_FILE,
-    output:
-        library=directory(INTENTS / "p{p}" / "{task}"),
-        row=PROCESSED / "simulated" / "learning" / "p{p}_{task}.csv",
-        timing=PROCESSED / "simulated" / "learning" / "p{p}_{task}_timing.csv",
-    log:
-        "logs/learn/p{p}_{task}.log",
-    conda:
-        "../envs/casa.yaml"
-    shell:
-        "exec casa simulate learn --config {input.config} --participant {wildcards.p} "
-        "--task {wildcards.task} --before {input.before} --library {output.library} "
-        "--out {output.row} --timing {output.timing} > {log} 2>&1"
-
-
-rule simulate_after_learning:
-    input:
-        before=SIMULATED / "p{p}" / "before",
-        config=CONFIG_FILE,
-        libraries=expand(INTENTS / "p{{p}}" / "{task}", task=UNKNOWN_TASKS),
-    output:
-        directory(SIMULATED / "p{p}" / "after"),
-    log:
-        "logs/simulate/p{p}_after.log",
+        "logs/simulate/p{p}_protocol.log",
     conda:
         "../envs/casa.yaml"
     params:
-        library=lambda wildcards: INTENTS / f"p{wildcards.p}",
+        # The folder of the participant's libraries, one per unknown task.
+        library=lambda wildcards, output: Path(output.libraries[0]).parent,
     shell:
-        "exec casa simulate after --config {input.config} --participant {wildcards.p} "
-        "--before {input.before} --library {params.library} --out {output} > {log} 2>&1"
+        "exec casa simulate protocol --config {input.config} --participant {wildcards.p} "
+        "--before {output.before} --library {params.library} --rows {output.rows} "
+        "--timing-rows {output.timings} --out {output.after} > {log} 2>&1"
 
 
 rule learning_table:
