@@ -274,25 +274,36 @@ def test_modules_are_small():
     assert not long, f"modules over {MAX_LINES} lines: {long}"
 
 
+def string_set(value: object) -> frozenset[str] | tuple[str, ...] | None:
+    """A constant's strings: as a set from three on, in order for two (a pair's order is
+    often its meaning, e.g. (new, reference))."""
+    if not isinstance(value, tuple | list | frozenset | set) or len(value) < 2:
+        return None
+    if not all(isinstance(v, str) for v in value):
+        return None
+    return frozenset(value) if len(value) >= 3 else tuple(value)
+
+
 VOCABULARY = {
-    name: frozenset(value)
+    name: key
     for name, value in vars(vocabulary).items()
-    if name.isupper() and isinstance(value, tuple) and len(value) >= 2
+    if name.isupper() and (key := string_set(value)) is not None
 }
 
 
-def literal_strings(node: ast.AST) -> frozenset[str] | None:
-    """The strings of a tuple/list/set literal of strings, else None."""
-    if not isinstance(node, ast.Tuple | ast.List | ast.Set) or len(node.elts) < 2:
+def literal_strings(node: ast.AST) -> frozenset[str] | tuple[str, ...] | None:
+    """The strings of a tuple/list/set literal of strings (:func:`string_set`), else None."""
+    if not isinstance(node, ast.Tuple | ast.List | ast.Set):
         return None
     if not all(isinstance(e, ast.Constant) and isinstance(e.value, str) for e in node.elts):
         return None
-    return frozenset(e.value for e in node.elts)
+    return string_set([e.value for e in node.elts])
 
 
 def test_vocabulary_is_defined_once():
-    # A literal listing the same names as a vocabulary tuple (in any order) is a second
-    # definition; a literal naming a subset (e.g. two of the methods) is a choice, not a copy.
+    # A literal listing the same names as a vocabulary tuple (in any order; a pair in its
+    # order) is a second definition; a literal naming a subset (two of the methods) is a
+    # choice, not a copy.
     copies = []
     for path in MODULES:
         if path.name == "vocabulary.py":
@@ -303,6 +314,93 @@ def test_vocabulary_is_defined_once():
                 if strings == value:
                     copies.append(f"{module_name(path)}:{node.lineno} repeats vocabulary.{name}")
     assert not copies, "\n".join(copies)
+
+
+def top_level_constants(tree: ast.Module) -> dict[str, object]:
+    """The module's ``UPPER_CASE = literal`` assignments (names and values)."""
+    found = {}
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and len(node.targets) == 1:
+            target = node.targets[0]
+            if isinstance(target, ast.Name) and target.id.lstrip("_").isupper():
+                try:
+                    found[target.id] = ast.literal_eval(node.value)
+                except ValueError:
+                    continue
+    return found
+
+
+def repeated_definitions(paths: Iterable[Path], root: Path = PACKAGE) -> list[str]:
+    """Every second definition of one thing: a constant of the same name and value in two
+    modules, two constants (or a constant and a literal) listing the same strings, a
+    function with the same name and body in two modules."""
+    constants: dict[tuple[str, str], list[str]] = {}
+    strings: dict[object, list[str]] = {}
+    functions: dict[tuple[str, str], list[str]] = {}
+    literals = []
+    for path in paths:
+        module = module_name(path, root)
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for name, value in top_level_constants(tree).items():
+            if not isinstance(value, dict | list | set):
+                constants.setdefault((name, repr(value)), []).append(module)
+            if (key := string_set(value)) is not None:
+                strings.setdefault(key, []).append(f"{module}.{name}")
+        for node in tree.body:
+            if isinstance(node, ast.FunctionDef):
+                body = ast.dump(ast.Module(body=node.body, type_ignores=[]))
+                functions.setdefault((node.name, body), []).append(module)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Tuple | ast.List | ast.Set):
+                try:
+                    key = string_set(ast.literal_eval(node))
+                except ValueError:
+                    continue
+                if key is not None:
+                    literals.append((key, module, node.lineno))
+    found = [
+        f"{name} = {value} in {', '.join(where)}"
+        for (name, value), where in constants.items()
+        if len(where) > 1
+    ]
+    found += [
+        f"the same strings: {', '.join(where)}" for where in strings.values() if len(where) > 1
+    ]
+    found += [
+        f"def {name} in {', '.join(where)}"
+        for (name, _), where in functions.items()
+        if len(where) > 1
+    ]
+    for key, module, line in literals:
+        owners = [o for o in strings.get(key, []) if not o.startswith(module + ".")]
+        if owners:
+            found.append(f"{module}:{line} repeats {', '.join(owners)}")
+    return found
+
+
+def test_nothing_is_defined_twice():
+    found = repeated_definitions(MODULES)
+    assert not found, "\n".join(found)
+
+
+REPEATED = {
+    "pkg/__init__.py": "",
+    "pkg/a.py": 'TICK = 0.05\nGOALS = ("green", "purple")\n\ndef _as_list(x):\n    return [x]\n',
+    "pkg/b.py": 'TICK = 0.05\n\ndef _as_list(x):\n    return [x]\n\nNAMES = ["green", "purple"]\n',
+    "pkg/c.py": 'def f():\n    return ("green", "purple")\n\nPAIR = ("purple", "green")\n',
+}
+
+
+def test_the_check_finds_each_kind_of_repetition(tmp_path):
+    for name, text in REPEATED.items():
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text(text)
+    found = repeated_definitions(sorted((tmp_path / "pkg").rglob("*.py")), tmp_path / "pkg")
+    assert "TICK = 0.05 in pkg.a, pkg.b" in found
+    assert "the same strings: pkg.a.GOALS, pkg.b.NAMES" in found
+    assert "def _as_list in pkg.a, pkg.b" in found
+    assert "pkg.c:2 repeats pkg.a.GOALS, pkg.b.NAMES" in found
+    assert not any("PAIR" in line for line in found)  # another order: another pair
 
 
 def test_one_condition_of():

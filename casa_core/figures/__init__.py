@@ -14,10 +14,10 @@ a :class:`matplotlib.figure.Figure`; :func:`save_figure` writes it as vector PDF
   task (:func:`case_study_figure`)
 - :mod:`~casa_core.figures.scene`: a rendering of the arm and scene, with its legend
   (:func:`scene_figure`)
-- :mod:`~casa_core.figures.replay`: a replay's confidence beside the logged one
+- :mod:`~casa_core.figures.replay`: a replayed trial: belief, confidence and alpha over time
 - :mod:`~casa_core.figures.robustness`: the claims under each modelling variant
 - :mod:`~casa_core.figures.power`: power against the number of participants
-- :mod:`~casa_core.figures.build`: the figures of one dataset, from its folder
+- :mod:`~casa_core.figures.build`: the tables read, a figure drawn and written (``casa figure``)
 """
 
 from casa_core.figures.arbitration import arbitration_figure
