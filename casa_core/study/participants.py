@@ -11,87 +11,17 @@ and the participant presses against it, so assisting for the wrong intent costs
 effort, as it does for a person.
 
 Population parameters (fixed before any result was looked at; distributions in
-``config/config.yaml`` under ``simulation.population``) and their sources:
-
-- ``reaction_time``: delay from seeing the arm to a changed key, s. The Model
-  Human Processor puts a simple perceive-decide-press cycle at about 0.24 s
-  (range 0.1-0.47 s; Card, Moran & Newell 1983, *The Psychology of
-  Human-Computer Interaction*, ch. 2); choosing among several keys adds to it
-  (Hick 1952; Hyman 1953). Lognormal, median 0.35 s.
-- ``perception_noise``: standard deviation of the perceived end-effector
-  position, m, slowly varying (AR(1), 0.5 s). Judging 3-D position on a screen
-  is imprecise, worst in depth (Cutting & Vishton 1995); about 1 cm, twice that
-  along the viewing direction (the robot's x axis).
-- ``deadband``: position error below which no key is held, m (about 1.5 cm):
-  keyboard control is on/off, so operators accept small errors instead of
-  tapping (bang-bang control with a dead zone, Sheridan & Ferrell 1974,
-  *Man-Machine Systems*).
-- ``lapse_rate`` and ``lapse_duration``: attention lapses per second and their
-  length, s, during which the held keys do not change (lapses of about 0.5-1.5 s
-  in sustained tasks; Dinges & Powell 1985 psychomotor vigilance data).
-- ``wrong_key``: probability that a press hits a wrong key; keystroke error
-  rates of typists are about 1-3% (Salthouse 1986, Psychol. Bull. 99(3)).
-- ``max_keys``: most keys held at once (1-3); players combine two direction
-  keys for diagonals, novices often press one at a time.
-
-The expert of the case study has a short delay, little noise, no lapses and no
-wrong keys.
+``config/config.yaml`` under ``simulation.population``): ``reaction_time`` (s),
+``perception_noise`` (m), ``deadband`` (m), ``lapse_rate`` (1/s) and ``lapse_duration``
+(s), ``wrong_key`` (probability), ``max_keys``. The expert of the case study has a short
+delay, little noise, no lapses and no wrong keys.
 
 Two operator models share this machinery (config key ``simulation.operator``):
-
-- *lookahead* (:class:`SimulatedParticipant`) steers toward a point
-  :data:`LOOKAHEAD` ahead on the path and holds a key while the error to it along an
-  axis exceeds the deadband, so on the path it always holds a key, also when the
-  robot already carries the arm along.
-- *predictive* (:class:`PredictiveParticipant`) acts on where the arm is heading. It
-  low-pass filters its perceived positions into a velocity, predicts the arm's
-  position its own reaction time plus a lead time ahead, and holds a key on an axis
-  only when that prediction leaves the path by more than the deadband, or falls
-  behind the point of the reference that far ahead by more than the deadband (a
-  stopped arm falls behind, so it still drives the arm itself); otherwise it
-  releases the keys and lets the robot work. It reacts to events (the prediction
-  crossing the deadband), not to every change: intermittent, event-driven control
-  (Gawthrop, Loram, Lakie & Gollee 2011, "Intermittent control: a computational
-  theory of human control", *Biological Cybernetics* 104(1-2)), whose predictor
-  likewise bridges the operator's own delay.
-
-The predictive operator's three parameters, taken from the manual-control and
-psychology literature before any of the study's results under this model were looked
-at:
-
-- :data:`LEAD_TIME` T_L = 0.5 s. In McRuer's crossover model (McRuer & Jex 1967,
-  "A review of quasi-linear pilot models", *IEEE Trans. Human Factors in
-  Electronics* HFE-8(3); McRuer 1980, "Human dynamics in man-machine systems",
-  *Automatica* 16(3)) the operator adapts lead and lag so that the open loop is
-  about omega_c e^{-tau s} / s near crossover, with an effective delay tau of
-  0.1-0.4 s. A key sets the arm's velocity (a rate-command element, K/s), for which
-  the model needs no lead; sluggish elements draw lead time constants up to about
-  1-2 s. The robot's share makes the arm move in ways the keys do not command, so
-  we take a lead between the two, 0.5 s, added to the participant's own reaction
-  time (the delay its prediction bridges): the prediction horizon is
-  ``reaction_time + LEAD_TIME``. The filtered velocity times that horizon is the
-  crossover model's lead-lag equaliser (T_L s + 1) / (T_I s + 1) applied to the
-  perceived position, with T_I = :data:`VELOCITY_FILTER`.
-- :data:`VELOCITY_FILTER` T_I = 1.0 s, the time constant of the velocity estimate.
-  Humans integrate visual motion over several hundred ms up to about 1 s, and less
-  perfectly for motion in depth (Katz, Hennig, Cormack & Huk 2015, "A distinct
-  mechanism of temporal integration for motion through depth", *J. Neurosci.*
-  35(28)); depth is the noisiest axis here. A shorter filter would turn the
-  perception noise above (AR(1), 0.5 s) into velocity errors larger than the
-  deadband.
-- :data:`REFRACTORY` = 0.25 s, the shortest interval from one change of the held keys
-  to the next press. A person cannot start a second response within about
-  0.15-0.5 s of the first: the psychological refractory period (Welford 1952, "The
-  'psychological refractory period' and the timing of high-speed performance",
-  *Br. J. Psychol.* 43; Pashler 1994, "Dual-task interference in simple tasks",
-  *Psychol. Bull.* 116(2)), which intermittent control takes as its shortest open-loop
-  interval (Gawthrop et al. 2011 above). We take the lower end, 0.25 s, because the
-  reaction time above already holds the perceive-decide delay. A release is not held
-  back, as lifting a finger chooses no key, but like any response it starts the
-  interval before the next press. Without this interval the noisy
-  prediction (perception noise above) moves a second held key from axis to axis at the
-  tick rate; 0.5 s made an operator overshoot so far that it failed a task
-  without assistance (docs/departures.md gives the numbers).
+*lookahead* (:class:`SimulatedParticipant`) steers toward a point :data:`LOOKAHEAD` ahead
+on the path; *predictive* (:class:`PredictiveParticipant`) acts on where the arm is
+heading, with a lead time :data:`LEAD_TIME`, a velocity filter :data:`VELOCITY_FILTER` and
+a refractory interval :data:`REFRACTORY`. What each model does, and the literature each
+parameter comes from: docs/departures.md, "Simulated operators".
 """
 
 from __future__ import annotations
@@ -109,9 +39,9 @@ from casa_core.study.path_geometry import unit_tangents
 ROT_TO_METRES = 0.1
 LOOKAHEAD = 0.04  # m of path ahead that the participant steers toward
 DONE_ROT_TOLERANCE = 0.15  # rad
-#: The predictive operator's lead time constant T_L, s (module docstring).
+#: The predictive operator's lead time constant T_L, s (docs/departures.md).
 LEAD_TIME = 0.5
-#: Time constant of the predictive operator's velocity estimate, s (module docstring).
+#: Time constant of the predictive operator's velocity estimate, s (docs/departures.md).
 VELOCITY_FILTER = 1.0
 #: Shortest interval from a change of the predictive operator's keys to its next press, s.
 REFRACTORY = 0.25
