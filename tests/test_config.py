@@ -12,6 +12,7 @@ import yaml
 from test_logs_synthetic import ROOT, write_dataset
 from test_workflow import ENV, copy_workflow, snakemake
 
+import casa_core
 from casa_core import defaults
 from casa_core.assist import assistant, presets
 from casa_core.config import (
@@ -65,7 +66,7 @@ def test_the_schema_closes_every_level_and_every_key_is_required_or_defaulted():
 
 
 def test_the_schema_is_package_data():
-    assert SCHEMA_PATH.parent == Path(assistant.__file__).parent
+    assert SCHEMA_PATH.parent == Path(casa_core.__file__).parent
     assert SCHEMA_PATH.suffix == ".yaml"  # pyproject's package-data takes **/*.yaml
 
 
