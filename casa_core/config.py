@@ -228,7 +228,12 @@ def _problems(config: Any, *, partial: bool) -> list[str]:
 def _describe(error: jsonschema.ValidationError) -> Iterator[str]:
     key = ".".join(str(part) for part in error.absolute_path)
     prefix = f"{key}." if key else ""
-    rule, node, value = error.validator, error.schema, error.instance
+    # Any: the stubs allow a bool schema and unset values, which the errors of a
+    # validation never carry.
+    rule = error.validator
+    node: Any = error.schema
+    value: Any = error.instance
+    expected: Any = error.validator_value
     if rule == "additionalProperties":
         allowed = list(node.get("properties", {}))
         for name in (name for name in value if name not in allowed):
@@ -236,19 +241,19 @@ def _describe(error: jsonschema.ValidationError) -> Iterator[str]:
             hint = f"; did you mean {close[0]}?" if close else ""
             yield f"{prefix}{name}: unknown key{hint} (allowed: {', '.join(allowed)})"
     elif rule == "required":
-        for name in (name for name in error.validator_value if name not in value):
+        for name in (name for name in expected if name not in value):
             yield f"{prefix}{name}: missing (required)"
     elif rule == "type":
         names = {"object": "a mapping", "array": "a list", "integer": "an integer", "null": "null"}
-        kinds = error.validator_value
+        kinds = expected
         kinds = kinds if isinstance(kinds, list) else [kinds]  # a type list: any of them
         kind = " or ".join(names.get(k, f"a {k}") for k in kinds)
         yield f"{key}: must be {kind}, got {value!r}"
     elif rule == "enum":
-        choices = ", ".join(map(str, error.validator_value))
+        choices = ", ".join(map(str, expected))
         yield f"{key}: must be one of {choices}, got {value!r}"
     elif rule in _BOUNDS:
-        yield f"{key}: must be {_BOUNDS[rule]} {error.validator_value}, got {value!r}"
+        yield f"{key}: must be {_BOUNDS[rule]} {expected}, got {value!r}"
     elif rule in ("minItems", "minLength"):
         yield f"{key}: must not be empty"
     else:

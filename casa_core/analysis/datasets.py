@@ -203,6 +203,7 @@ def _trials_and_steps(
     rows, step_parts = [], []
     for check in checks:
         meta, frame = check.meta, check.frame  # parsed and checked by check_paths
+        assert meta is not None and frame is not None
         task = meta["task"]
         if task not in intended:
             intended[task] = tasks.intended_trajectory(task, scene)
@@ -268,6 +269,7 @@ def _likert(checks: list[FileCheck], trials: pd.DataFrame, dataset: str) -> pd.D
     )
     parts = []
     for check in checks:
+        assert check.frame is not None  # parsed and checked by check_paths
         answers = check.frame.copy()
         if "source" not in answers.columns:
             answers["source"] = answers["participant"].map(sources).fillna("unknown")
@@ -317,8 +319,8 @@ def write_validation(
     Paths in the table are relative to the folder given when exactly one folder
     is given. The table is written whatever the outcome.
     """
-    paths = [Path(p) for p in paths]
-    root = paths[0] if len(paths) == 1 and paths[0].is_dir() else Path(".")
-    checks = check_paths(paths)
+    given = [Path(p) for p in paths]
+    root = given[0] if len(given) == 1 and given[0].is_dir() else Path(".")
+    checks = check_paths(given)
     write_csv(out_csv, validation_table(checks, root, allow_invalid=allow_invalid))
     return checks

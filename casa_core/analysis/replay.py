@@ -40,6 +40,7 @@ import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -84,7 +85,7 @@ def trial_settings(
     >>> trial_settings(meta, preset="casa", arbitration="confidence")[0].evidence
     'commanded'
     """
-    recorded = meta.get("inference") if isinstance(meta.get("inference"), dict) else {}
+    recorded: Any = meta.get("inference") if isinstance(meta.get("inference"), dict) else {}
     if preset is None:
         preset = recorded.get("preset", DEFAULT_PRESET)
         # The trial's evidence goes with its own preset; another preset brings its own.
@@ -171,7 +172,7 @@ def resolve_intents(
         if not isinstance(item, Intent):
             path = Path(item)
             files.setdefault(path.name.removesuffix(INTENT_SUFFIX), []).append(path)
-    intents = []
+    intents: list[Intent] = []
     for name in names:
         if name in scene.goals:
             intents.append(GoalIntent(name, scene.goals[name], **chosen.goal_options()))

@@ -250,7 +250,7 @@ def condition_legend(fig, axes, *, extra: Sequence[str] = (), ncols: int | None 
     ``extra`` names other labelled artists (e.g. marked points) to list after the
     conditions when drawn; ``ncols`` defaults to one row.
     """
-    handles = {}
+    handles: dict = {}
     for ax in axes:
         for handle, name in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(name, handle)

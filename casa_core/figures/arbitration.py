@@ -132,5 +132,5 @@ def arbitration_figure(
         if epsilon is not None:
             caption += f" Dotted: the misspecification threshold epsilon = {epsilon:g}."
         style.add_caption(fig, caption)
-    fig.axes_by_name = axes
+    fig.axes_by_name = axes  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig

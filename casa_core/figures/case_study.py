@@ -154,7 +154,7 @@ def case_study_figure(
                 ax.set_xlabel("Time (s)")
         _intent_legend(fig, grid[:, :2].ravel())
         style.add_caption(fig, _caption(rows, participant, epsilon, title))
-    fig.axes_grid = axes_grid
+    fig.axes_grid = axes_grid  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig
 
 

@@ -80,7 +80,7 @@ def power_figure(power: pd.DataFrame) -> Figure:
             f"intervals; dotted: {TARGET:.0%} power; grey line: the paper's N = {PAPER_N}. "
             "The effects are the model's, not people's.",
         )
-    fig.axes_by_name = named
+    fig.axes_by_name = named  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig
 
 

@@ -123,5 +123,5 @@ def robustness_figure(claims: pd.DataFrame) -> Figure:
         if DEFAULT_VARIANT in cols:
             caption += f" Framed: the default variant ({DEFAULT_VARIANT}, the study's config)."
         style.add_caption(fig, caption)
-    fig.axes_by_name = {"grid": ax}
+    fig.axes_by_name = {"grid": ax}  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig

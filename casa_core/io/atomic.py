@@ -75,11 +75,11 @@ def _renamed_when_done(paths, *, folders: bool) -> Iterator[list[Path]]:
             if folders:
                 temporaries.append(Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.")))
             else:
-                fd, tmp = tempfile.mkstemp(
+                fd, name = tempfile.mkstemp(
                     dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix
                 )
                 os.close(fd)
-                temporaries.append(Path(tmp))
+                temporaries.append(Path(name))
         yield list(temporaries)
         for tmp in temporaries:
             os.chmod(tmp, FOLDER_MODE if folders else FILE_MODE)

@@ -102,7 +102,7 @@ class SessionWindow:
         self.width, self.height = width, height
         self._to_clip = np.asarray(projection).reshape(4, 4).T @ np.asarray(view).reshape(4, 4).T
         self._unproject = np.linalg.inv(self._to_clip)
-        self._resting = None
+        self._resting: str | None = None
 
     def reopen(self) -> None:
         """A new window after the old one was closed."""
@@ -255,7 +255,7 @@ class SessionWindow:
         self.highlight(task)
         self._go = self.big("GO", GO)
         self.write(f"Keys: {HELP}", self.height - 80, size=1.2)
-        self._warning = None
+        self._warning: int | None = None
         self._banner = self._replace(None, self._banner_text(0.0), 30, INK)
         self._clock = time.perf_counter()  # after drawing: the first tick is not late
         self._walls: list[float] = []
@@ -348,7 +348,8 @@ class SessionWindow:
             self.clear()
             top = self.write("Please rest for a moment.", 0, size=2.0)
             self._bar_top = self.write(message, top) + 30
-            self._resting, self._bar = message, [None, None, None]
+            self._bar: list[int | None] = [None, None, None]
+            self._resting = message
             self._bar[0] = self._line(None, MARGIN, self.width - MARGIN, (1.0, 1.0, 1.0))
         right = MARGIN + (self.width - 2 * MARGIN) * float(np.clip(fraction, 0.005, 1))
         self._bar[1] = self._line(self._bar[1], MARGIN, right, GO)

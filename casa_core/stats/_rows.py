@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pandas as pd
 
@@ -41,7 +43,7 @@ class Rows:
         self.rows: list[dict] = []
 
     def add(self, **values) -> None:
-        row = {column: np.nan for column in STATS_COLUMNS}
+        row: dict[str, Any] = {column: np.nan for column in STATS_COLUMNS}
         row.update({"comparison": "", "note": ""})
         row.update({k: v for k, v in values.items() if k in STATS_COLUMNS})
         self.rows.append(row)

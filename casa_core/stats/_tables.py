@@ -12,6 +12,7 @@ Two kinds of trouble are kept apart on purpose:
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -76,7 +77,7 @@ def clean(data: pd.DataFrame, dv: str, factors: Sequence[str], what: str) -> pd.
 
 def skipped_row(columns: Sequence[str], note: str, **known) -> pd.DataFrame:
     """A one-row table with NaN statistics, the given known values and ``note``."""
-    row = {column: np.nan for column in columns}
+    row: dict[str, Any] = {column: np.nan for column in columns}
     row.update(known)
     row["note"] = note
     return pd.DataFrame([row], columns=[*columns, "note"])

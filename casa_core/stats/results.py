@@ -49,6 +49,7 @@ def facts(tables: Mapping[str, pd.DataFrame | None]) -> list[str]:
     Inference preset: casa; evidence: commanded.
     """
     trials = tables["trials"]
+    assert trials is not None  # the trials are always given; the other tables may be None
     n = trials["participant"].nunique() if "participant" in trials.columns else 0
     lines = [f"Participants: {n} (in trials.csv)."]
     sources = _values(trials, "source")

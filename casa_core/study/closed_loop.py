@@ -195,7 +195,8 @@ def run_trial(
         **{**inference.assistant_options(), **(assistant_options or {})},
     )
     own_sim = sim is None
-    sim = ArmSimulation(scene) if own_sim else sim
+    if sim is None:
+        sim = ArmSimulation(scene)
     try:
         rows = _closed_loop(
             sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick

@@ -57,7 +57,7 @@ def read_demonstrations(
             # table is the costly part); every log that is kept is read and validated whole.
             meta, problems = load_meta(json_path)
             valid = meta is not None and all(p.severity != "error" for p in problems)
-            if not valid or _wanted(meta, task, phase):
+            if meta is None or not valid or _wanted(meta, task, phase):
                 meta, frame = read_trial(stem)
         if not _wanted(meta, task, phase):
             if task is None or meta.get("task") == task:

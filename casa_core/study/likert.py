@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -102,13 +103,15 @@ def simulated_surveys(
     """
     dt = scene.teleop.dt
     logs = logs or {}
-    trials = {}
+    trials: dict[tuple[str, str, str], tuple[dict[str, Any], pd.DataFrame]] = {}
     for folder in folders:
         for json_path in sorted(Path(folder).glob("*.json")):
             meta, frame = logs.get(json_path) or read_trial(json_path.with_suffix(""))
             if meta["phase"] in UNANALYSED_PHASES:
                 continue
-            measured = metrics.trial_metrics(frame, intended_trajectory(meta["task"], scene), dt=dt)
+            measured: dict[str, Any] = metrics.trial_metrics(
+                frame, intended_trajectory(meta["task"], scene), dt=dt
+            )
             trials[(meta["task"], meta["method"], meta["phase"])] = (measured, frame)
     bias = 0.5 * rng.standard_normal()
     rows = []

@@ -75,7 +75,7 @@ def draw_participants(
     """
     drawn = []
     for _ in range(n):
-        values = {}
+        values: dict[str, float] = {}
         for name in (
             "reaction_time",
             "perception_noise",
@@ -88,8 +88,8 @@ def draw_participants(
             values[name] = float(spec["median"] * np.exp(spec["sigma"] * rng.standard_normal()))
         values["wrong_key"] = min(values["wrong_key"], 0.5)
         keys = population["max_keys"]
-        values["max_keys"] = int(rng.choice(keys["values"], p=keys["p"]))
-        drawn.append(ParticipantParams(**values))
+        max_keys = int(rng.choice(keys["values"], p=keys["p"]))
+        drawn.append(ParticipantParams(**values, max_keys=max_keys))
     return drawn
 
 
@@ -123,10 +123,10 @@ class SimulatedParticipant:
         self._scaled = self.reference * _SCALE
         # The path length of each step.
         self._steps = np.linalg.norm(np.diff(self._scaled, axis=0), axis=1)
-        self._seen = deque()  # (t, state) not yet perceived
-        self._perceived = None
+        self._seen: deque[tuple[float, np.ndarray]] = deque()  # (t, state) not yet perceived
+        self._perceived: np.ndarray | None = None
         self._noise = np.zeros(3)
-        self._ar1 = None
+        self._ar1: tuple[float, np.ndarray, float] | None = None
         self._progress = 0
         self._held: frozenset[str] = frozenset()
         self._lapse_until = -1.0
@@ -162,6 +162,7 @@ class SimulatedParticipant:
         decay, scale, root = self._ar1
         innovation = self.rng.standard_normal(3) * scale * root
         self._noise = decay * self._noise + innovation
+        assert self._perceived is not None  # keys() returns before perceiving anything
         perceived = self._perceived.copy()
         perceived[:3] += self._noise
         return perceived

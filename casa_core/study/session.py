@@ -257,8 +257,10 @@ class SessionRecord:
     def done(self, step: Step) -> bool:
         """Whether the step's output is on disk."""
         if step.kind == "trial":
+            assert step.spec is not None  # trials and questions carry their spec
             return self.trial_recorded(step.spec)
         if step.kind == "questions":
+            assert step.spec is not None
             return self.answered(step.spec)
         return all(self.intent_file(task).is_file() for task in self.demonstration_tasks())
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import threading
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 import pybullet as p
 
@@ -134,6 +135,7 @@ def _remove_halves(record: SessionRecord, log: SessionLog) -> None:
     for step in record.steps():
         if step.kind != "trial":
             continue
+        assert step.spec is not None  # a trial step carries its spec
         stem = record.stem(step.spec)
         halves = [stem.with_suffix(s) for s in TRIAL_SUFFIXES if stem.with_suffix(s).is_file()]
         if len(halves) == 1:
@@ -145,7 +147,7 @@ class _Runner:
     def __init__(self, record: SessionRecord, scene: Scene, log: SessionLog, window_factory):
         self.record, self.scene, self.log = record, scene, log
         self.settings = record.settings
-        self._after = None  # the intents after learning, once loaded
+        self._after: list | None = None  # the intents after learning, once loaded
         self.window = window_factory(scene, notify=lambda kind: print(f"screen {kind}", flush=True))
 
     def run(self) -> str:
@@ -189,7 +191,8 @@ class _Runner:
             return self._trial(step.spec)
         if step.kind == "questions":
             return self._questions(step.spec)
-        return self._learning()
+        self._learning()
+        return None
 
     def _learned_intents(self) -> list:
         """What the robot knows after learning, planned from the start once, before GO.
@@ -263,6 +266,7 @@ class _Runner:
 
     def _questions(self, spec) -> str | None:
         label = label_of(spec, self.record.index)
+        assert label is not None  # questions follow only the trials with a robot's help
         scores = {}
         for number, question in enumerate(QUESTIONS, start=1):
             score = self.window.likert(texts.statement(question, label), number, len(QUESTIONS))
@@ -280,7 +284,7 @@ class _Runner:
         for number, task in enumerate(tasks, start=1):
             if record.intent_file(task).is_file():
                 continue
-            state = {"done": 0.0, "result": None, "error": None}
+            state: dict[str, Any] = {"done": 0.0, "result": None, "error": None}
 
             def progress(iteration, most, state=state):
                 state["done"] = iteration / most

@@ -16,6 +16,7 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -195,7 +196,12 @@ def learn_from_demonstrations(
     if not demo_stems:
         return row, timing
     read = read_demonstrations(demos_dir, task, logs=logs)  # once, for learning and evidence
-    options = {"seed": seed, "task": task, "participant": pid, "demonstrations": read}
+    options: dict[str, Any] = {
+        "seed": seed,
+        "task": task,
+        "participant": pid,
+        "demonstrations": read,
+    }
     path, _history, seconds = learn_to_library(
         demos_dir, name, library=library, objects=scene_objects(scene), **options
     )
@@ -307,7 +313,12 @@ def simulate_protocol(
 
     pid = pid or participant_id(index)
     params = params or participant_params(index, simulation)
-    options = {"simulation": simulation, "params": params, "pid": pid, "inference": inference}
+    options: dict[str, Any] = {
+        "simulation": simulation,
+        "params": params,
+        "pid": pid,
+        "inference": inference,
+    }
     options["logs"] = {}  # each log as written, for the surveys
     before = simulate_before_learning(index, scene, out_dir=before_dir, **options)
     rows, timings, learned, seconds = [], [], [], []

@@ -87,10 +87,10 @@ def parse_name(path: Path | str) -> SessionName | str:
         return "not an .npz session file"
     match = _SESSION.fullmatch(path.name)
     number = int(match["task"]) if match else None
-    task = TASK_NUMBERS.get(number)
+    task = TASK_NUMBERS.get(number) if number is not None else None
     method = METHOD_LETTERS.get(match["letter"]) if match else None
     learned = bool(match and match["learned"])
-    phases = TASK_PHASES.get(task, ())
+    phases = TASK_PHASES.get(task, ()) if task is not None else ()
     if task is None or method is None or (learned and "after_learning" not in phases):
         rule = (
             "expected task<N><letter>_data.npz with N in "
@@ -230,7 +230,8 @@ def import_original(
     scene_path = ORIGINAL_SCENE if scene is None else Path(scene)
     load_scene(scene_path)  # a SceneError names the file and the key
     scene_text = scene_path.read_text(encoding="utf-8")
-    result, problems, trials = ImportResult(), [], []
+    result, trials = ImportResult(), []
+    problems: list[Problem] = []
     for path in sorted(folder.iterdir()):
         if path.name.startswith("."):
             continue

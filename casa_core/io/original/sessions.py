@@ -115,7 +115,8 @@ class _Checker:
     """Checks of one session's arrays; every problem names the file, the key and the rule."""
 
     def __init__(self, file: str, arrays: dict):
-        self.file, self.arrays, self.problems = file, arrays, []
+        self.file, self.arrays = file, arrays
+        self.problems: list[Problem] = []
 
     def fail(self, key: str, rule: str, message: str) -> None:
         self.problems.append(Problem(self.file, f"key {key!r}", rule, message))
@@ -208,7 +209,7 @@ def read_session(path: Path | str) -> Session:
 def _inference_arrays(check: _Checker, steps):
     """``belief_hist`` (m, g) and ``beta_hist`` (m, g) or None; (0,) arrays when m = 0."""
     m = None if steps is None else len(steps)
-    arrays = {}
+    arrays: dict[str, np.ndarray] = {}
     for key in ("belief_hist", "beta_hist"):
         raw = check.arrays.get(key)
         if raw is None and key == "belief_hist":
