@@ -208,9 +208,11 @@ class Assistant:
         self.names = names
         self._start_trial(None)  # the trial's state, set by reset()
 
-    def _require_reset(self, method: str) -> None:
+    def _require_reset(self, method: str) -> np.ndarray:
+        """The last state observed; RuntimeError before :meth:`reset`."""
         if self._last_state is None:
             raise RuntimeError(f"call reset(start_state) before {method}")
+        return self._last_state
 
     def reset(self, state) -> None:
         """Start a trial at ``state``: no evidence, costs measured from here."""
@@ -249,18 +251,19 @@ class Assistant:
         whether :meth:`act` was given a nonzero user action since the last step. A
         caller feeding a trajectory of the user's own (an analysis, a test) passes True.
         """
-        self._require_reset("update")
+        last = self._require_reset("update")
         state = np.asarray(state, dtype=float)
-        if state.shape != self._last_state.shape or not np.isfinite(state).all():
-            raise ValueError(f"state must be finite, of shape {self._last_state.shape}: {state!r}")
+        if state.shape != last.shape or not np.isfinite(state).all():
+            raise ValueError(f"state must be finite, of shape {last.shape}: {state!r}")
         self._steps += 1
         time_left = max(self.horizon - self._steps * self.dt, 0.0)
         gave_input = self._user_input if user_input is None else bool(user_input)
         counts = self.idle_is_evidence or gave_input
         self._user_input = False
         observed = state
-        if self.evidence == "commanded" and self._robot_motion.any():
-            observed = state - self._robot_motion
+        motion = self._robot_motion
+        if self.evidence == "commanded" and motion is not None and motion.any():
+            observed = state - motion
         for j, intent in enumerate(self.intents):
             self._prefix[j] += intent.step_cost(self._last_state, observed)
         self._last_state = state

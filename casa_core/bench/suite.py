@@ -143,7 +143,7 @@ def time_assistance_steps(
                 if repeat >= warmup:
                     times[index].append((time.thread_time_ns() - start) / 1e3)
     return [
-        {"step_us": float(np.median(t)), "assisting": a.latest.alpha < 1.0}
+        {"step_us": float(np.median(t)), "assisting": a.latest is not None and a.latest.alpha < 1.0}
         for t, a in zip(times, fed, strict=True)
     ]
 

@@ -8,6 +8,8 @@ unknown goal. Right: the human's control authority ``alpha`` under the distance
 
 from __future__ import annotations
 
+from typing import Any
+
 import pandas as pd
 from matplotlib.figure import Figure
 
@@ -87,7 +89,8 @@ def arbitration_figure(
         fig = style.new_figure(7.0, 2.8)
         axes = fig.subplot_mosaic([["belief", "alpha"], ["confidence", "alpha"]], sharex=True)
         for intent, series in per_intent.groupby("intent", sort=True):
-            kwargs = {"color": colours[intent], "label": style.display_name(str(intent))}
+            kwargs: dict[str, Any] = {"color": colours[intent]}
+            kwargs["label"] = style.display_name(str(intent))
             axes["belief"].plot(series["t"], series["belief"], **kwargs)
             axes["confidence"].plot(series["t"], series["beta"], **kwargs)
         axes["belief"].set_ylabel("Belief $P(\\theta \\mid \\xi)$")

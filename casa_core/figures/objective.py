@@ -215,7 +215,7 @@ def objective_figure(
     """
     rows = prepare_trials(trials)
     tasks = [t for t in style.SHOWN_TASKS if t in set(rows["task"])]
-    columns = tasks or [None]
+    columns: list[str | None] = [*tasks] or [None]
     with style.context():
         fig = style.new_figure(7.0, 1.6 * (len(METRICS) + 1) + 0.7)
         grid = fig.subplots(len(METRICS) + 1, len(columns), squeeze=False)

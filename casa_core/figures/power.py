@@ -8,6 +8,8 @@ interval as error bars; the 80 % line and the paper's N.
 
 from __future__ import annotations
 
+from typing import Any
+
 import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
@@ -18,7 +20,7 @@ from casa_core.stats.power import ANALYSES, METRICS, PAPER_N, POWER_COLUMNS
 
 #: The conventional target power.
 TARGET = 0.8
-LINESTYLES = {"paper": "-", "within": "--"}
+LINESTYLES: dict[str, Any] = {"paper": "-", "within": "--"}
 #: Okabe-Ito colours, one per variant in the table's order.
 COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000")
 

@@ -136,8 +136,9 @@ def _condition(meta: dict | None) -> tuple[str, ...] | None:
     """The trial's participant, task, method and phase, when all are text."""
     if not meta:
         return None
-    key = tuple(meta.get(k) for k in CONDITION_KEYS)
-    return key if all(isinstance(v, str) for v in key) else None
+    values = [meta.get(k) for k in CONDITION_KEYS]
+    key = tuple(v for v in values if isinstance(v, str))
+    return key if len(key) == len(values) else None
 
 
 def _unique_conditions(checks: list[FileCheck]) -> None:
@@ -271,7 +272,7 @@ def _check_files(files: Iterable[tuple[Path, Path | None]]) -> list[FileCheck]:
             surveys.append(FileCheck(path, "surveys", problems, frame=frame))
         elif kind == "trial":
             stems.setdefault(trial_stem(path), root)
-        else:
+        elif isinstance(kind, FileCheck):
             checks.append(kind)
     trials = [_check_trial(stem, root) for stem, root in stems.items()]
     _unique_conditions(trials)

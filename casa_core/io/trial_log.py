@@ -237,7 +237,7 @@ def read_trial(stem: Path | str) -> tuple[dict, pd.DataFrame]:
     ['pair']
     """
     meta, frame, problems = load_trial(stem)
-    if errors(problems):
+    if errors(problems) or meta is None or frame is None:
         raise LogError(problems)
     return meta, frame
 

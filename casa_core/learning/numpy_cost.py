@@ -55,7 +55,7 @@ _BASIS = np.stack(
 _BUFFERED_SIZES = 32
 
 
-def _linear_layers(network: torch.nn.Module) -> tuple[list, float]:
+def _linear_layers(network: torch.nn.Sequential) -> tuple[list, float]:
     """``[(W, b), ...]`` (detached float32 copies) of the 3 linear layers and the leaky slope."""
     modules = list(network)
     linears = [m for m in modules if isinstance(m, torch.nn.Linear)]

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import torch
@@ -51,7 +52,9 @@ from casa_core.model._checks import require_positive
 from casa_core.planning import _kernels
 
 #: Cost of states: takes a tensor ``(B, n, 4)`` and returns per-state costs ``(B, n)``.
-StateCost = Callable[[torch.Tensor], torch.Tensor]
+#: A per-state cost: torch tensors in and out, or numpy arrays for a cost with its own
+#: gradient (``value_and_grad``).
+StateCost = Callable[[Any], Any]
 
 LIMITS = ("axis", "norm")
 

@@ -174,7 +174,7 @@ def _signed_rank(frame, dv, within, subject, a, b) -> pd.Series:
     ranks = stats.rankdata(np.abs(nonzero))
     # R's rule: exact only below 50 pairs with neither zero differences nor tied ranks.
     exact = len(nonzero) < 50 and len(nonzero) == len(diff) and len(np.unique(ranks)) == len(ranks)
-    result = stats.wilcoxon(
+    result = stats.wilcoxon(  # type: ignore[call-overload]  # scipy-stubs lack "asymptotic"
         wide[a],
         wide[b],
         zero_method="wilcox",

@@ -40,6 +40,7 @@ import zipfile
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -198,9 +199,9 @@ def read_session(path: Path | str) -> Session:
     steps = check.array("inf_start_time", None)
     check.increasing("inf_start_time", steps)
     belief, beta = _inference_arrays(check, steps)
-    started = check.arrays.get("start_T")
-    number = np.ndim(started) == 0 and np.asarray(started).dtype.kind in "iuf"
-    started = float(started) if number else None
+    raw_start = check.arrays.get("start_T")
+    number = raw_start is not None and np.ndim(raw_start) == 0
+    started = float(raw_start) if number and np.asarray(raw_start).dtype.kind in "iuf" else None
     if check.problems:
         raise SessionError(check.problems)
     return Session(str(path), time, q, command, steps, belief, beta, started)
@@ -209,7 +210,7 @@ def read_session(path: Path | str) -> Session:
 def _inference_arrays(check: _Checker, steps):
     """``belief_hist`` (m, g) and ``beta_hist`` (m, g) or None; (0,) arrays when m = 0."""
     m = None if steps is None else len(steps)
-    arrays: dict[str, np.ndarray] = {}
+    arrays: dict[str, np.ndarray | None] = {}
     for key in ("belief_hist", "beta_hist"):
         raw = check.arrays.get(key)
         if raw is None and key == "belief_hist":
@@ -329,7 +330,8 @@ def convert_session(session: Session, method: str, goal_names) -> Converted:
     sample_keys = [command_keys(qi, ci) for qi, ci in zip(session.q, session.command, strict=True)]
     at_sample = _held(session.time, ticks)
     keys = ["" if i < 0 else sample_keys[i] for i in at_sample]
-    table = {"t": ticks, "x": position[:, 0], "y": position[:, 1], "z": position[:, 2]}
+    table: dict[str, Any] = {"t": ticks, "x": position[:, 0], "y": position[:, 1]}
+    table["z"] = position[:, 2]
     table |= {"rot": rot, "keys": keys}
     table |= {name: q[:, j] for j, name in enumerate(JOINTS)}
 
