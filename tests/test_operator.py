@@ -21,12 +21,14 @@ from casa_core.study.participants import (
     SimulatedParticipant,
     make_participant,
 )
+from casa_core.study.settings import StudySettings
 from casa_core.vocabulary import TASKS
 
-SIMULATION = load_config("config/config.yaml")["simulation"]
+CONFIG = load_config("config/config.yaml")
+SETTINGS = StudySettings.from_config(CONFIG)
 SCENE = load_scene()
 EXPERT = ParticipantParams(0.25, 0.003, 0.008, 0.0, 0.5, 0.0, 3)
-PARTICIPANTS = range(SIMULATION["participants"])
+PARTICIPANTS = range(CONFIG["simulation"]["participants"])
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +39,7 @@ def sim():
 
 def trial(sim, task, method, index, *, operator="predictive", params=None):
     """One trial of participant ``index``: keys pressed, key ticks, success, the frame."""
-    params = params or simulate.participant_params(index, SIMULATION)
+    params = params or simulate.participant_params(index, SETTINGS.seed, SETTINGS.population)
     reference = intended_trajectory(task, SCENE)
     source = make_participant(
         params, reference, rng=np.random.default_rng([2021, index, 1]), operator=operator
@@ -49,7 +51,7 @@ def trial(sim, task, method, index, *, operator="predictive", params=None):
         source,
         participant="p",
         sim=sim,
-        max_duration=SIMULATION["max_duration"],
+        max_duration=SETTINGS.max_duration,
     ).frame
     keys = frame["keys"].fillna("").tolist()
     executed = frame[["t", "x", "y", "z", "rot"]].to_numpy()
@@ -97,7 +99,7 @@ def test_the_predictive_operator_completes_every_task_on_its_own(sim, task):
     for index in (0, 1, 2):
         _, _, success, frame = trial(sim, task, "NA", index)
         assert success, f"participant {index} did not complete {task}"
-        assert frame["t"].iloc[-1] < SIMULATION["max_duration"]
+        assert frame["t"].iloc[-1] < SETTINGS.max_duration
     assert trial(sim, task, "NA", 0, params=EXPERT)[2]
 
 
@@ -105,7 +107,7 @@ def test_the_lookahead_model_stays_selectable_and_unchanged(sim):
     # The factory's "lookahead" is the lookahead class itself, so the same draws give the
     # same trial as constructing it directly.
     reference = intended_trajectory("known_goal", SCENE)
-    params = simulate.participant_params(0, SIMULATION)
+    params = simulate.participant_params(0, SETTINGS.seed, SETTINGS.population)
     direct = SimulatedParticipant(params, reference, rng=np.random.default_rng([2021, 0, 1]))
     frame = run_trial(SCENE, "known_goal", "CASA", direct, participant="p", sim=sim).frame
     assert frame.equals(trial(sim, "known_goal", "CASA", 0, operator="lookahead")[3])

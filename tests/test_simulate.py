@@ -1,5 +1,7 @@
 """The study runner's own logic: seeding, misspecification detection, one real trial set."""
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -8,17 +10,19 @@ from casa_core.config import load_config
 from casa_core.io import read_trial, validate_paths
 from casa_core.scene import load_scene
 from casa_core.study import protocol, simulate
+from casa_core.study.settings import StudySettings
 from casa_core.vocabulary import LEARNED_NAMES, UNKNOWN_TASKS
 
 CONFIG = load_config("config/config.yaml", "config/ci.yaml")
+SETTINGS = StudySettings.from_config(CONFIG)
 SCENE = load_scene()
 
 
 def test_participant_parameters_depend_only_on_seed_and_index():
-    simulation = CONFIG["simulation"]
-    first = simulate.participant_params(4, simulation)
-    assert first == simulate.participant_params(4, {**simulation, "participants": 50})
-    assert first != simulate.participant_params(5, simulation)
+    many = load_config("config/config.yaml", overrides={"simulation": {"participants": 50}})
+    first = simulate.participant_params(4, SETTINGS.seed, SETTINGS.population)
+    assert StudySettings.from_config(many) == SETTINGS  # the number is no setting of a trial
+    assert first != simulate.participant_params(5, SETTINGS.seed, SETTINGS.population)
 
 
 def test_misspecification_needs_every_beta_below_epsilon_at_the_end():
@@ -34,15 +38,15 @@ def test_misspecification_needs_every_beta_below_epsilon_at_the_end():
 
 
 def test_before_learning_writes_valid_logs_for_the_whole_protocol(tmp_path):
-    settings = {**CONFIG["simulation"], "demonstrations": 1, "max_duration": 20.0}
-    stems = simulate.simulate_before_learning(0, SCENE, simulation=settings, out_dir=tmp_path)
+    settings = replace(SETTINGS, demonstrations=1, max_duration=20.0)
+    stems = simulate.simulate_before_learning(0, SCENE, settings=settings, out_dir=tmp_path)
     assert len(stems) == 10 + 2  # familiarization, 3 + 3 + 3 conditions, 1 demo per task
     assert validate_paths([tmp_path]) == []
     meta, _ = read_trial(tmp_path / "unknown_goal_before_learning_CASA")
     assert meta["inference"] == {"preset": "casa", "evidence": "commanded"}
     assert meta["notes"].startswith("misspecification detected: ")
     again = tmp_path / "again"
-    simulate.simulate_before_learning(0, SCENE, simulation=settings, out_dir=again)
+    simulate.simulate_before_learning(0, SCENE, settings=settings, out_dir=again)
     for stem in stems:  # the same seed gives the same logs, byte for byte
         for suffix in (".csv", ".json"):
             assert (again / stem.name).with_suffix(suffix).read_bytes() == stem.with_suffix(
@@ -54,11 +58,9 @@ def test_a_participant_index_below_zero_is_refused_before_simulating(tmp_path):
     # Indices are 0-based (casa simulate's --participant is 1-based); -1 reached numpy's
     # seeding and failed there with "expected non-negative integer".
     for call in (
-        lambda: simulate.participant_params(-1, CONFIG["simulation"]),
+        lambda: simulate.participant_params(-1, SETTINGS.seed, SETTINGS.population),
         lambda: simulate.participant_id(-1),
-        lambda: simulate.simulate_before_learning(
-            -1, SCENE, simulation=CONFIG["simulation"], out_dir=tmp_path
-        ),
+        lambda: simulate.simulate_before_learning(-1, SCENE, settings=SETTINGS, out_dir=tmp_path),
     ):
         with pytest.raises(ValueError, match="participant index must be an integer >= 0"):
             call()
@@ -153,7 +155,7 @@ def test_the_protocol_writes_the_bytes_of_the_three_stages(tmp_path):
     # ci.yaml's config: 10 trials and 5 demonstrations of each unknown task before
     # learning, each a .json and a .csv; CASA after learning of each unknown task and
     # the surveys; an intent, a learning row and a timing row per unknown task.
-    demonstrations = CONFIG["simulation"]["demonstrations"]
+    demonstrations = SETTINGS.demonstrations
     assert len([n for n in stages if n.startswith("raw/before/")]) == 2 * (10 + 2 * demonstrations)
     assert len([n for n in stages if n.startswith("raw/after/")]) == 2 * 2 + 1
     intents = {f"intents/{task}/{LEARNED_NAMES[task]}.intent.json" for task in UNKNOWN_TASKS}

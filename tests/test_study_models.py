@@ -12,19 +12,22 @@ from casa_core.scene import load_scene
 from casa_core.study import likert, protocol
 from casa_core.study.arbitration_comparison import compare_arbitrations
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant, draw_participants
+from casa_core.study.settings import Population
 from casa_core.vocabulary import QUESTIONS
 
 SCENE = load_scene()
 EXPERT = ParticipantParams(0.25, 0.003, 0.008, 0.0, 0.5, 0.0, 3)
-POPULATION = {
-    "reaction_time": {"median": 0.35, "sigma": 0.25},
-    "perception_noise": {"median": 0.01, "sigma": 0.3},
-    "deadband": {"median": 0.015, "sigma": 0.25},
-    "lapse_rate": {"median": 0.03, "sigma": 0.5},
-    "lapse_duration": {"median": 0.8, "sigma": 0.3},
-    "wrong_key": {"median": 0.02, "sigma": 0.5},
-    "max_keys": {"values": [1, 2, 3], "p": [0.4, 0.4, 0.2]},
-}
+POPULATION = Population.from_config(
+    {
+        "reaction_time": {"median": 0.35, "sigma": 0.25},
+        "perception_noise": {"median": 0.01, "sigma": 0.3},
+        "deadband": {"median": 0.015, "sigma": 0.25},
+        "lapse_rate": {"median": 0.03, "sigma": 0.5},
+        "lapse_duration": {"median": 0.8, "sigma": 0.3},
+        "wrong_key": {"median": 0.02, "sigma": 0.5},
+        "max_keys": {"values": [1, 2, 3], "p": [0.4, 0.4, 0.2]},
+    }
+)
 
 
 def drive(participant, reference, pull=None, limit=60.0, tick=0.05):

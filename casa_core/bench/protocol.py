@@ -59,8 +59,8 @@ def participant_benchmark(scene: Scene, *, config: dict, participants=(0,)) -> d
     scene : Scene
         The task scene.
     config : dict
-        A workflow config (:func:`casa_core.config.load_config`): its ``simulation``
-        and ``inference`` blocks, as ``casa simulate`` reads them.
+        A validated workflow config (:func:`casa_core.config.load_config`), read once
+        into :class:`~casa_core.study.settings.StudySettings`, as ``casa simulate`` does.
     participants : sequence of int
         0-based participant indices to run.
 
@@ -71,10 +71,10 @@ def participant_benchmark(scene: Scene, *, config: dict, participants=(0,)) -> d
         ``irl_s_all`` (every measurement).
     """
     from casa_core.study import simulate
+    from casa_core.study.settings import StudySettings
     from casa_core.vocabulary import UNKNOWN_TASKS
 
-    simulation = config["simulation"]
-    inference = simulate.inference_preset(config)
+    settings = StudySettings.from_config(config)  # read once, here, at the edge
     threads = torch.get_num_threads()
     torch.set_num_threads(1)  # one core, as in the targets
     totals, learning = [], []
@@ -86,11 +86,10 @@ def participant_benchmark(scene: Scene, *, config: dict, participants=(0,)) -> d
                 run = simulate.simulate_protocol(
                     index,
                     scene,
-                    simulation=simulation,
+                    settings=settings,
                     before_dir=work / "before",
                     after_dir=work / "after",
                     libraries={task: work / "intents" / task for task in UNKNOWN_TASKS},
-                    inference=inference,
                 )
                 learning += run.learning_cpu_s
                 totals.append(time.process_time() - start)

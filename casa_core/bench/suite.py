@@ -40,6 +40,7 @@ from casa_core.assist.assistant import Assistant
 from casa_core.assist.intents import GoalIntent
 from casa_core.assist.tasks import intended_trajectory, task_waypoints
 from casa_core.bench.protocol import TARGETS, participant_benchmark, target_met
+from casa_core.defaults import HORIZON
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import REQUIRED_GOALS, Scene
 from casa_core.study.closed_loop import run_trial
@@ -54,7 +55,7 @@ WORKSPACE = (np.array([0.25, -0.4, 0.1]), np.array([0.6, 0.3, 0.4]))
 def bench_trajectory(scene: Scene, dt: float = 0.5) -> np.ndarray:
     """States ``(n, 4)`` every ``dt`` s of the Unknown Goal reference, held at its end."""
     reference = intended_trajectory("unknown_goal", scene, dt=dt)[:, 1:]
-    n_needed = int(round(15.0 / dt)) + 1
+    n_needed = int(round(HORIZON / dt)) + 1
     if len(reference) < n_needed:
         reference = np.vstack([reference, np.repeat(reference[-1:], n_needed - len(reference), 0)])
     return reference

@@ -148,6 +148,7 @@ def _run_stage(args) -> int:
 
     from casa_core.io.atomic import write_csv
     from casa_core.study import simulate
+    from casa_core.study.settings import StudySettings
 
     if args.stage == "learning-table":
         from casa_core.io import read_table
@@ -160,22 +161,21 @@ def _run_stage(args) -> int:
                 print(f"casa simulate learning-table: {len(table)} learned intent(s) -> {out}")
         return 0
     config, scene = _load_config(args)
-    simulation = config["simulation"]
-    inference = simulate.inference_preset(config)
+    settings = StudySettings.from_config(config)
     index = args.participant - 1
     pid = simulate.participant_id(index)
     if args.stage == "protocol":
-        written = _protocol(args, index, scene, simulation=simulation, inference=inference)
+        written = _protocol(args, index, scene, settings=settings)
     elif args.stage == "before":
         written = simulate.simulate_before_learning(
-            index, scene, simulation=simulation, out_dir=Path(args.out), inference=inference
+            index, scene, settings=settings, out_dir=Path(args.out)
         )
     elif args.stage == "learn":
         row, timing = simulate.learn_from_demonstrations(
             Path(args.before),
             args.task,
             scene=scene,
-            seed=simulate.learning_seed(index, simulation),
+            seed=simulate.learning_seed(index, settings.seed),
             library=Path(args.library),
             pid=pid,
         )
@@ -189,17 +189,16 @@ def _run_stage(args) -> int:
         written = simulate.simulate_after_learning(
             index,
             scene,
-            simulation=simulation,
+            settings=settings,
             learned=learned,
             before_dir=Path(args.before),
             out_dir=Path(args.out),
-            inference=inference,
         )
     print(f"casa simulate {args.stage}: participant {pid}, {len(written)} file(s)")
     return 0
 
 
-def _protocol(args, index: int, scene: Scene, *, simulation: dict, inference) -> list:
+def _protocol(args, index: int, scene: Scene, *, settings) -> list:
     """``casa simulate protocol``: every folder is filled aside and renamed when all are done."""
     from pathlib import Path
 
@@ -214,11 +213,10 @@ def _protocol(args, index: int, scene: Scene, *, simulation: dict, inference) ->
         run = simulate.simulate_protocol(
             index,
             scene,
-            simulation=simulation,
+            settings=settings,
             before_dir=before,
             after_dir=after,
             libraries=dict(zip(tasks, libraries, strict=True)),
-            inference=inference,
         )
     tables = [*zip(args.rows, run.rows, strict=True)]
     if args.timing_rows:
@@ -253,14 +251,14 @@ def _case_study(args) -> int:
     from casa_core.io import LogError
     from casa_core.io.atomic import write_csv
     from casa_core.study import simulate
+    from casa_core.study.settings import StudySettings
 
     config, scene = _load_config(args)
     try:
         steps, arbitration = simulate.run_case_study(
             scene,
-            config["case_study"],
+            StudySettings.from_case_study(config),
             work_dir=Path(args.work),
-            inference=simulate.inference_preset(config),
         )
     except (LogError, OSError, ValueError) as error:
         print(f"casa case-study: {error}", file=sys.stderr)

@@ -26,7 +26,7 @@ import copy
 from collections.abc import Mapping
 
 from casa_core.assist.presets import preset
-from casa_core.config import default, merge, validate_config
+from casa_core.config import merge, validate_config
 
 #: The keys an overlay may set: section -> its keys (None: every key of the section).
 OVERLAY_KEYS: dict[str, tuple[str, ...] | None] = {
@@ -98,5 +98,5 @@ def settings_text(config: Mapping) -> str:
     """
     inference = config["inference"]
     evidence = preset(inference["preset"], evidence=inference.get("evidence")).evidence
-    operator = config["simulation"].get("operator") or default("simulation.operator")
+    operator = config["simulation"]["operator"]
     return f"preset {inference['preset']}, evidence {evidence}, operator {operator}"

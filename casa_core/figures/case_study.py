@@ -15,9 +15,8 @@ from matplotlib.figure import Figure
 
 from casa_core.figures import style
 from casa_core.io import tables
+from casa_core.io.contract import CASE_STEPS_COLUMNS
 from casa_core.vocabulary import TASK_LABELS
-
-COLUMNS = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
 
 #: Which condition's run fills the confidence panels.
 BEFORE = ("CASA", "CASA before learning")
@@ -52,7 +51,7 @@ def prepare_steps(steps: pd.DataFrame, participant: str | None = None) -> tuple[
         If a column is missing, the participant is absent, a value is not a number, or
         one run has two rows for the same time and intent.
     """
-    tables.require_columns(steps, COLUMNS, "steps")
+    tables.require_columns(steps, CASE_STEPS_COLUMNS, "steps")
     names = sorted(steps["participant"].astype(str).unique())
     if not names:
         raise ValueError("steps: the table has no rows")

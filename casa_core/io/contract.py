@@ -36,6 +36,7 @@ from casa_core.vocabulary import (
 
 __all__ = [
     "BELIEF_SUM_TOLERANCE",
+    "CASE_STEPS_COLUMNS",
     "COLUMN_RANGES",
     "CONDITION_KEYS",
     "FRAME_OPTIONAL",
@@ -116,6 +117,18 @@ TIME_RANGE = (0.0, 3600.0)
 TICK_TOLERANCE = 0.1
 #: The beliefs of a row sum to 1 within this.
 BELIEF_SUM_TOLERANCE = 1e-6
+
+#: Columns of the case study's ``steps.csv``, in order: one row per tick and intent of the
+#: expert's PBA and CASA trials (casa_core.study.simulate.run_case_study writes it,
+#: casa_core.figures.case_study draws it).
+CASE_STEPS_COLUMNS = (
+    *CONDITION_KEYS,
+    "t",
+    "alpha",
+    "intent",
+    "beta",
+    "belief",
+)
 
 #: Columns of a surveys file; ``source`` is optional.
 SURVEY_COLUMNS = ("participant", "task", "method", "phase", "question", "score")

@@ -10,6 +10,7 @@
   steps and where to resume; :mod:`~casa_core.study.session_texts`: what its window says;
   :mod:`~casa_core.study.session_run`: its loop, each step recorded when done;
 - :mod:`~casa_core.study.simulate`: the simulated study and the expert case study;
+- :mod:`~casa_core.study.settings`: what they read from the config, read once at the edge;
 - :mod:`~casa_core.study.learn_from_logs`: demonstration logs in, an intent file out;
 - :mod:`~casa_core.study.learning_evidence`: what the learner sees and how it is judged;
 - :mod:`~casa_core.study.likert`: the simulated Likert answers;

@@ -34,6 +34,7 @@ import numpy as np
 from casa_core.robot.keys import AXIS_KEYS
 from casa_core.study import _operator_kernels as _kernels
 from casa_core.study.path_geometry import unit_tangents
+from casa_core.study.settings import LOGNORMAL_PARAMETERS, Population
 
 # Rotation error is compared with position error at this many metres per radian.
 ROT_TO_METRES = 0.1
@@ -66,29 +67,22 @@ class ParticipantParams:
 
 
 def draw_participants(
-    n: int, population: dict, rng: np.random.Generator
+    n: int, population: Population, rng: np.random.Generator
 ) -> list[ParticipantParams]:
-    """Draw ``n`` participants from the population distribution in the config.
+    """Draw ``n`` participants from the population of the study's settings.
 
-    ``population`` maps each parameter to ``{"median": m, "sigma": s}`` (lognormal)
-    except ``max_keys``, which maps to ``{"values": [...], "p": [...]}``.
+    Each parameter is lognormal (:class:`~casa_core.study.settings.Lognormal`) except
+    ``max_keys``, one of its ``values`` drawn with the probabilities ``p``.
     """
     drawn = []
     for _ in range(n):
         values: dict[str, float] = {}
-        for name in (
-            "reaction_time",
-            "perception_noise",
-            "deadband",
-            "lapse_rate",
-            "lapse_duration",
-            "wrong_key",
-        ):
-            spec = population[name]
-            values[name] = float(spec["median"] * np.exp(spec["sigma"] * rng.standard_normal()))
+        for name in LOGNORMAL_PARAMETERS:
+            spec = getattr(population, name)
+            values[name] = float(spec.median * np.exp(spec.sigma * rng.standard_normal()))
         values["wrong_key"] = min(values["wrong_key"], 0.5)
-        keys = population["max_keys"]
-        max_keys = int(rng.choice(keys["values"], p=keys["p"]))
+        keys = population.max_keys
+        max_keys = int(rng.choice(keys.values, p=keys.p))
         drawn.append(ParticipantParams(**values, max_keys=max_keys))
     return drawn
 

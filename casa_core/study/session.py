@@ -136,20 +136,24 @@ class SessionSettings:
 
     @classmethod
     def from_config(cls, config: dict) -> SessionSettings:
-        """From a validated config (:func:`casa_core.config.load_config`)."""
-        from casa_core.study.simulate import inference_preset
+        """From a validated config (:func:`casa_core.config.load_config`).
 
-        session, simulation = config["session"], config["simulation"]
+        The protocol's settings and the inference are the simulated study's
+        (:meth:`casa_core.study.settings.StudySettings.from_config`).
+        """
+        from casa_core.study.settings import StudySettings
+
+        session, study = config["session"], StudySettings.from_config(config)
         return cls(
             max_duration=float(session["max_duration"]),
             countdown=int(session["countdown"]),
             preview=float(session["preview"]),
-            demonstrations=int(simulation["demonstrations"]),
-            demonstrations_when=simulation["demonstrations_when"],
-            epsilon=float(simulation["epsilon"]),
-            seed=int(simulation["seed"]),
+            demonstrations=study.demonstrations,
+            demonstrations_when=study.demonstrations_when,
+            epsilon=study.epsilon,
+            seed=study.seed,
             learning_iterations=session["learning_iterations"],
-            inference=inference_preset(config),
+            inference=study.inference,
         )
 
 

@@ -21,15 +21,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from casa_core.assist.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.assist.tasks import intended_trajectory
-from casa_core.config import default
-from casa_core.defaults import DEMONSTRATIONS
+from casa_core.defaults import HORIZON
 from casa_core.io import SURVEYS_NAME, write_surveys
+from casa_core.io.contract import CASE_STEPS_COLUMNS
 from casa_core.scene import Scene
 from casa_core.study import likert, protocol
-from casa_core.study.closed_loop import as_preset, known_goal_intents, run_trial, trial_intents
+from casa_core.study.closed_loop import known_goal_intents, run_trial, trial_intents
 from casa_core.study.participants import ParticipantParams, draw_participants, make_participant
+from casa_core.study.settings import Population, StudySettings
 from casa_core.vocabulary import LEARNED_NAMES, UNKNOWN_TASKS
 
 #: Stream numbers of default_rng([seed, index, stream]).
@@ -64,41 +64,35 @@ def participant_id(index: int) -> str:
     return f"p{check_index(index) + 1:02d}"
 
 
-def participant_params(index: int, simulation: dict) -> ParticipantParams:
-    """The participant's operator parameters, drawn from the population of the config."""
+def participant_params(index: int, seed: int, population: Population | None) -> ParticipantParams:
+    """The participant's operator parameters, drawn from ``population`` with ``seed``."""
     check_index(index)
-    rng = np.random.default_rng([simulation["seed"], index, PARAMS_STREAM])
-    return draw_participants(1, simulation["population"], rng)[0]
+    if population is None:
+        raise ValueError("no population to draw the participant from: give its params")
+    rng = np.random.default_rng([seed, index, PARAMS_STREAM])
+    return draw_participants(1, population, rng)[0]
 
 
-def learning_seed(index: int, simulation: dict) -> int:
-    """The seed of learning participant ``index``'s intents: ``simulation["seed"] + index``.
+def learning_seed(index: int, seed: int) -> int:
+    """The seed of learning participant ``index``'s intents: the study's ``seed`` + ``index``.
 
     Examples
     --------
-    >>> learning_seed(2, {"seed": 2021})
+    >>> learning_seed(2, 2021)
     2023
     """
-    return int(simulation["seed"]) + index
+    return int(seed) + index
 
 
-def inference_preset(config: dict) -> Preset:
-    """The inference preset of a workflow config's ``inference`` block.
-
-    Examples
-    --------
-    >>> inference_preset({"inference": {"preset": "original", "evidence": None}}).evidence
-    'executed'
-    """
-    settings = config["inference"]
-    return preset(settings["preset"], evidence=settings["evidence"])
+def _params(index: int, settings: StudySettings, params: ParticipantParams | None):
+    return params or participant_params(index, settings.seed, settings.population)
 
 
-def _run(scene, spec, settings, params, rng, pid, sim, inference, **options):
+def _run(scene, spec, settings: StudySettings, params, rng, pid, sim, **options):
     reference = intended_trajectory(spec.task, scene)
-    # The operator model (casa_core.study.participants); the schema's default if unset.
-    operator = settings.get("operator") or default("simulation.operator")
-    source = make_participant(params, reference, rng=rng, tick=scene.teleop.dt, operator=operator)
+    source = make_participant(
+        params, reference, rng=rng, tick=scene.teleop.dt, operator=settings.operator
+    )
     return run_trial(
         scene,
         spec.task,
@@ -106,10 +100,10 @@ def _run(scene, spec, settings, params, rng, pid, sim, inference, **options):
         source,
         participant=pid,
         phase=spec.phase,
-        max_duration=settings["max_duration"],
+        max_duration=settings.max_duration,
         sim=sim,
-        inference=inference,
-        seed=int(settings["seed"]),
+        inference=settings.inference,
+        seed=settings.seed,
         **options,
     )
 
@@ -126,11 +120,10 @@ def simulate_before_learning(
     index: int,
     scene: Scene,
     *,
-    simulation: dict,
+    settings: StudySettings,
     out_dir: Path,
     params: ParticipantParams | None = None,
     pid: str | None = None,
-    inference: Preset | str = DEFAULT_PRESET,
     logs: dict | None = None,
 ) -> list[Path]:
     """Phases 1-3 and the demonstrations of one participant; returns the logs' stems.
@@ -139,16 +132,15 @@ def simulate_before_learning(
 
     After the CASA trial of each unknown task the robot checks for misspecification
     (:func:`casa_core.study.protocol.misspecification_detected`, noted in the log); with
-    ``simulation["demonstrations_when"] == "detected"`` it asks for demonstrations
+    ``settings.demonstrations_when == "detected"`` it asks for demonstrations
     only then, with ``"always"`` (the paper's protocol) every time.
     """
     from casa_core.robot.sim import ArmSimulation
 
     check_index(index)
     pid = pid or participant_id(index)
-    params = params or participant_params(index, simulation)
-    seed = int(simulation["seed"])
-    epsilon = float(simulation["epsilon"])
+    params = _params(index, settings, params)
+    seed, epsilon = settings.seed, settings.epsilon
     out_dir = Path(out_dir)
     specs = protocol.before_learning(index)
     written = []
@@ -156,18 +148,18 @@ def simulate_before_learning(
         detected = {}
         for stream, spec in enumerate(specs, start=1):
             rng = np.random.default_rng([seed, index, stream])
-            result = _run(scene, spec, simulation, params, rng, pid, sim, inference)
+            result = _run(scene, spec, settings, params, rng, pid, sim)
             if spec.method == "CASA" and spec.phase == "before_learning":
                 detected[spec.task] = protocol.misspecification_detected(result.frame, epsilon)
                 note = f"misspecification detected: {detected[spec.task]}"
                 result.meta["notes"] = "; ".join(filter(None, [result.meta.get("notes"), note]))
             written.append(_write(result, out_dir / spec.stem, logs))
         stream = len(specs) + 1
-        for task in protocol.demonstration_tasks(simulation["demonstrations_when"], detected):
-            for spec in protocol.demonstrations(task, simulation["demonstrations"]):
+        for task in protocol.demonstration_tasks(settings.demonstrations_when, detected):
+            for spec in protocol.demonstrations(task, settings.demonstrations):
                 rng = np.random.default_rng([seed, index, stream])
                 stream += 1
-                result = _run(scene, spec, simulation, params, rng, pid, sim, inference)
+                result = _run(scene, spec, settings, params, rng, pid, sim)
                 written.append(_write(result, out_dir / spec.stem, logs))
     return written
 
@@ -215,13 +207,12 @@ def simulate_after_learning(
     index: int,
     scene: Scene,
     *,
-    simulation: dict,
+    settings: StudySettings,
     learned: list[Path],
     before_dir: Path,
     out_dir: Path,
     params: ParticipantParams | None = None,
     pid: str | None = None,
-    inference: Preset | str = DEFAULT_PRESET,
     logs: dict | None = None,
 ) -> list[Path]:
     """Phase 4 (CASA with every learned intent), then ``surveys.csv`` for all conditions.
@@ -232,18 +223,16 @@ def simulate_after_learning(
 
     check_index(index)
     pid = pid or participant_id(index)
-    params = params or participant_params(index, simulation)
-    seed = int(simulation["seed"])
+    params = _params(index, settings, params)
+    seed = settings.seed
     out_dir = Path(out_dir)
     written, logs = [], dict(logs or {})
     if learned:
-        intents = trial_intents(scene, learned, inference=inference)
+        intents = trial_intents(scene, learned, inference=settings.inference)
         with ArmSimulation(scene) as sim:
             for offset, spec in enumerate(protocol.after_learning()):
                 rng = np.random.default_rng([seed, index, 1000 + offset])
-                result = _run(
-                    scene, spec, simulation, params, rng, pid, sim, inference, intents=intents
-                )
+                result = _run(scene, spec, settings, params, rng, pid, sim, intents=intents)
                 written.append(_write(result, out_dir / spec.stem, logs))
     surveys = likert.simulated_surveys(
         pid,
@@ -279,13 +268,12 @@ def simulate_protocol(
     index: int,
     scene: Scene,
     *,
-    simulation: dict,
+    settings: StudySettings,
     before_dir: Path,
     after_dir: Path,
     libraries: Mapping[str, Path],
     params: ParticipantParams | None = None,
     pid: str | None = None,
-    inference: Preset | str = DEFAULT_PRESET,
 ) -> ProtocolRun:
     """One participant's whole protocol, the three stages one after the other, in one process.
 
@@ -298,13 +286,14 @@ def simulate_protocol(
     Examples
     --------
     >>> import tempfile
+    >>> from dataclasses import replace
     >>> from casa_core.config import DEFAULT_CONFIG, load_config
     >>> from casa_core.scene import load_scene
-    >>> settings = load_config(DEFAULT_CONFIG)["simulation"]
-    >>> settings = {**settings, "demonstrations": 0, "max_duration": 0.5}  # nothing to learn
+    >>> settings = StudySettings.from_config(load_config(DEFAULT_CONFIG))
+    >>> settings = replace(settings, demonstrations=0, max_duration=0.5)  # nothing to learn
     >>> work = Path(tempfile.mkdtemp())
     >>> run = simulate_protocol(
-    ...     0, load_scene(), simulation=settings, before_dir=work / "before",
+    ...     0, load_scene(), settings=settings, before_dir=work / "before",
     ...     after_dir=work / "after", libraries={t: work / t for t in UNKNOWN_TASKS})
     >>> len(run.before), [row["task"] for row in run.rows], run.learned, run.after
     (10, ['unknown_goal', 'unknown_skill'], [], [])
@@ -312,13 +301,8 @@ def simulate_protocol(
     from casa_core.learning.library import intent_path
 
     pid = pid or participant_id(index)
-    params = params or participant_params(index, simulation)
-    options: dict[str, Any] = {
-        "simulation": simulation,
-        "params": params,
-        "pid": pid,
-        "inference": inference,
-    }
+    params = _params(index, settings, params)
+    options: dict[str, Any] = {"settings": settings, "params": params, "pid": pid}
     options["logs"] = {}  # each log as written, for the surveys
     before = simulate_before_learning(index, scene, out_dir=before_dir, **options)
     rows, timings, learned, seconds = [], [], [], []
@@ -328,7 +312,7 @@ def simulate_protocol(
             before_dir,
             task,
             scene=scene,
-            seed=learning_seed(index, simulation),
+            seed=learning_seed(index, settings.seed),
             library=libraries[task],
             pid=pid,
             logs=options["logs"],
@@ -357,17 +341,14 @@ EXPERT = ParticipantParams(
 
 
 def run_case_study(
-    scene: Scene,
-    case_study: dict,
-    *,
-    work_dir: Path,
-    inference: Preset | str = DEFAULT_PRESET,
+    scene: Scene, settings: StudySettings, *, work_dir: Path
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The expert case study (paper, Sec. IV) and the arbitration comparison.
 
     The expert does each task with PBA and CASA before learning, demonstrates the
-    unknown tasks 5 times, and does them again with CASA after learning. Logs and
-    the learned intents go to ``work_dir``.
+    unknown tasks ``settings.demonstrations`` times (5, :meth:`StudySettings.from_case_study`),
+    and does them again with CASA after learning. Logs and the learned intents go to
+    ``work_dir``.
 
     Returns
     -------
@@ -384,34 +365,26 @@ def run_case_study(
     from casa_core.study.arbitration_comparison import compare_arbitrations
 
     work_dir = Path(work_dir)
-    settings = {
-        "seed": case_study["seed"],
-        "max_duration": case_study["max_duration"],
-        "demonstrations": DEMONSTRATIONS,
-        "demonstrations_when": "always",
-        "epsilon": case_study["epsilon"],
-        "operator": case_study.get("operator") or default("case_study.operator"),
-    }
     after = work_dir / "logs" / "after"
     simulate_protocol(
         0,
         scene,
-        simulation=settings,
+        settings=settings,
         before_dir=work_dir / "logs" / "before",
         after_dir=after,
         libraries=dict.fromkeys(UNKNOWN_TASKS, work_dir / "library"),
         params=EXPERT,
         pid="expert",
-        inference=inference,
     )
     (after / SURVEYS_NAME).unlink()  # the expert answers no survey
     steps = build_tables(work_dir / "logs", scene, dataset="case_study").steps
     steps = steps[steps["method"].isin(["PBA", "CASA"]) & (steps["phase"] != "demonstration")]
-    columns = ["participant", "task", "method", "phase", "t", "alpha", "intent", "beta", "belief"]
-    steps = steps[columns].reset_index(drop=True)
+    steps = steps[list(CASE_STEPS_COLUMNS)].reset_index(drop=True)
 
-    inference = as_preset(inference)
-    trajectory = GoalIntent("red", scene.goals["red"]).optimal_trajectory(scene.start_state, 15.0)
+    inference = settings.inference
+    trajectory = GoalIntent("red", scene.goals["red"]).optimal_trajectory(
+        scene.start_state, HORIZON
+    )
     intents = known_goal_intents(scene, **inference.goal_options())
     arbitration = compare_arbitrations(
         Assistant(intents, **inference.assistant_options()), trajectory
