@@ -30,7 +30,7 @@ from casa_core.study import likert, protocol
 from casa_core.study.closed_loop import known_goal_intents, run_trial, trial_intents
 from casa_core.study.participants import ParticipantParams, draw_participants, make_participant
 from casa_core.study.settings import Population, StudySettings
-from casa_core.vocabulary import LEARNED_NAMES, UNKNOWN_TASKS
+from casa_core.vocabulary import ASSISTED_METHODS, LEARNED_NAMES, UNKNOWN_TASKS
 
 #: Stream numbers of default_rng([seed, index, stream]).
 PARAMS_STREAM, LIKERT_STREAM = 0, 9999
@@ -378,7 +378,9 @@ def run_case_study(
     )
     (after / SURVEYS_NAME).unlink()  # the expert answers no survey
     steps = build_tables(work_dir / "logs", scene, dataset="case_study").steps
-    steps = steps[steps["method"].isin(["PBA", "CASA"]) & (steps["phase"] != "demonstration")]
+    steps = steps[
+        steps["method"].isin(list(ASSISTED_METHODS)) & (steps["phase"] != "demonstration")
+    ]
     steps = steps[list(CASE_STEPS_COLUMNS)].reset_index(drop=True)
 
     inference = settings.inference
