@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from casa_core.cli._errors import cannot_write
 from casa_core.cli._options import example
 from casa_core.io import read_table
 
@@ -66,17 +67,6 @@ def _validate(args) -> int:
         file=sys.stderr,
     )
     return 1 if errors and not args.allow_invalid else 0
-
-
-def cannot_write(command: str, folder, error: OSError) -> int:
-    """Say that ``folder`` could not take the command's outputs (read-only, full); return 1."""
-    reason = error.strerror or str(error)
-    print(
-        f"casa {command}: cannot write into {folder}: {reason} (is the folder writable, "
-        "the disk full?); the files already there are unchanged",
-        file=sys.stderr,
-    )
-    return 1
 
 
 def _add_process(commands) -> None:

@@ -7,8 +7,7 @@ table; ``casa progress`` reports how far the power or robustness target has come
 
 from __future__ import annotations
 
-import sys
-
+from casa_core.cli._errors import fail
 from casa_core.cli._options import example, positive_int
 from casa_core.io import read_table
 
@@ -97,11 +96,6 @@ def _add_progress(commands) -> None:
     command.set_defaults(func=_progress)
 
 
-def _fail(step: str, error: Exception) -> int:
-    print(f"casa power {step}: {error}", file=sys.stderr)
-    return 2
-
-
 def _detect(args) -> int:
     from casa_core.config import load_config
     from casa_core.io.atomic import write_csv
@@ -119,7 +113,7 @@ def _detect(args) -> int:
             margins=Margins.from_config(config["statistics"]),
         )
     except (OSError, ValueError) as error:
-        return _fail("detect", error)
+        return fail("power detect", error)
     write_csv(args.out, rows)
     print(f"casa power detect: {int(rows['detected'].sum())} of {len(rows)} detected -> {args.out}")
     return 0
@@ -132,7 +126,7 @@ def _table(args) -> int:
     try:
         table = power_table([read_table(path) for path in sorted(args.detections)])
     except (OSError, ValueError) as error:
-        return _fail("table", error)
+        return fail("power table", error)
     write_csv(args.out, table)
     files = len(args.detections)
     print(f"casa power table: {len(table)} row(s) from {files} file(s) -> {args.out}")
@@ -146,7 +140,7 @@ def _figure(args) -> int:
     try:
         fig = power_figure(read_table(args.power))
     except (OSError, ValueError) as error:
-        return _fail("figure", error)
+        return fail("power figure", error)
     written = ", ".join(map(str, save_figure(fig, args.out)))
     print(f"casa power figure: -> {written}")
     return 0

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from casa_core.cli import robustness
+from casa_core.cli._errors import fail
 from casa_core.cli._options import example
 from casa_core.io import read_table
 
@@ -85,11 +85,6 @@ def register(commands) -> None:
     robustness.register_pages(pages)
 
 
-def _fail(error: Exception) -> int:
-    print(f"casa report: {error}", file=sys.stderr)
-    return 1
-
-
 def _summary(args) -> int:
     from casa_core.io.atomic import atomic_write_text
     from casa_core.report import pages as report_pages
@@ -98,7 +93,7 @@ def _summary(args) -> int:
     try:
         text = summary_markdown(read_table(args.stats), dataset=args.dataset)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     atomic_write_text(args.out_md, text)
     title = f"Results of dataset {args.dataset}"
     atomic_write_text(
@@ -119,7 +114,7 @@ def _results(args) -> int:
         claims = evaluate_claims(tables, epsilon=args.epsilon)
         text = results_markdown(claims, tables, dataset=args.dataset, operator=args.operator)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     atomic_write_text(args.out, text)
     written = [args.out]
     if args.out_html:
@@ -139,7 +134,7 @@ def _markdown(args) -> int:
     try:
         text = Path(args.markdown).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as error:
-        return _fail(error)
+        return fail("report", error)
     body = report_pages.markdown_html(text)
     atomic_write_text(args.out, report_pages.page(body, title=Path(args.markdown).name))
     print(f"casa report: {args.out}")
@@ -153,7 +148,7 @@ def _table(args) -> int:
     try:
         frame = read_table(args.table)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     title = args.title or Path(args.table).name
     note = f"{len(frame)} row(s) of {args.table}."
     body = report_pages.table_html(frame, title=title, note=note)

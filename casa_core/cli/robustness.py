@@ -7,8 +7,7 @@ into a table with a ``variant`` column; ``robustness`` merges the variants' tabl
 
 from __future__ import annotations
 
-import sys
-
+from casa_core.cli._errors import fail
 from casa_core.cli._options import example, positive_float
 from casa_core.defaults import EPSILON
 from casa_core.io import read_table
@@ -89,11 +88,6 @@ def register_pages(pages) -> None:
     merge.set_defaults(func=_robustness)
 
 
-def _fail(error: Exception) -> int:
-    print(f"casa report: {error}", file=sys.stderr)
-    return 1
-
-
 def _claims(args) -> int:
     from casa_core.io.atomic import write_csv
     from casa_core.stats.claims import evaluate_claims
@@ -110,7 +104,7 @@ def _claims(args) -> int:
         tables = read_claim_tables(args)
         claims = evaluate_claims(tables, epsilon=args.epsilon)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     rows = variant_claims(claims, variant=args.variant, settings=settings)
     write_csv(args.out, rows)
     verdicts = ", ".join(f"{r.claim} {r.verdict}" for r in rows.itertuples())
@@ -129,7 +123,7 @@ def _robustness(args) -> int:
         text = robustness_markdown(merged)
         fig = robustness_figure(merged)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     write_csv(args.out_csv, merged)
     atomic_write_text(args.out_md, text)
     written = [args.out_csv, args.out_md, *map(str, save_figure(fig, args.figure))]
