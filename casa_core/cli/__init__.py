@@ -13,7 +13,20 @@ import argparse
 import sys
 
 from casa_core import __version__
-from casa_core.cli import data, figure, learning, power, replay, report, robot, session, study
+from casa_core.cli import (
+    figure,
+    import_,
+    learning,
+    power,
+    process,
+    replay,
+    report,
+    robot,
+    session,
+    stats,
+    study,
+    validate,
+)
 from casa_core.cli._options import ExampleFormatter, example
 
 #: Examples of the commands whose module gives none, by their ``prog``.
@@ -46,7 +59,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"casa {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (data, robot, session, figure, learning, study, replay, report, power):
+    for module in (
+        validate,
+        process,
+        stats,
+        import_,
+        robot,
+        session,
+        figure,
+        learning,
+        study,
+        replay,
+        report,
+        power,
+    ):
         module.register(commands)
     for command in all_parsers(parser)[1:]:
         if command.epilog is None and command.prog in EXAMPLES:
