@@ -14,17 +14,20 @@ import sys
 
 from casa_core import __version__
 from casa_core.cli import (
+    bench,
     figure,
     import_,
-    learning,
+    learn,
+    library,
     power,
     process,
+    progress,
     replay,
     report,
-    robot,
     session,
     stats,
     study,
+    teleop,
     validate,
 )
 from casa_core.cli._options import ExampleFormatter, example
@@ -64,14 +67,17 @@ def build_parser() -> argparse.ArgumentParser:
         process,
         stats,
         import_,
-        robot,
+        teleop,
+        bench,
         session,
         figure,
-        learning,
+        learn,
+        library,
         study,
         replay,
         report,
         power,
+        progress,
     ):
         module.register(commands)
     for command in all_parsers(parser)[1:]:
