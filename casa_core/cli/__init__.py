@@ -15,6 +15,7 @@ import sys
 from casa_core import __version__
 from casa_core.cli import (
     bench,
+    case_study,
     figure,
     import_,
     learn,
@@ -25,8 +26,8 @@ from casa_core.cli import (
     replay,
     report,
     session,
+    simulate,
     stats,
-    study,
     teleop,
     validate,
 )
@@ -73,7 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
         figure,
         learn,
         library,
-        study,
+        simulate,
+        case_study,
         replay,
         report,
         power,
