@@ -402,7 +402,7 @@ def test_cli_writes_results_md_and_its_page(tmp_path, capsys):
     assert "<h2>C1: holds</h2>" in page.read_text()
     # A steps table without alpha: the error names the table and the column.
     write_csv(paths["steps"], steps.drop(columns="alpha"))
-    assert main(args) == 1
+    assert main(args) == 2  # a table that cannot be used (casa_core/cli/_errors.py)
     assert "steps table: missing column(s) 'alpha'" in capsys.readouterr().err
 
 

@@ -141,12 +141,12 @@ def test_every_command_reports_an_unwritable_output_without_a_traceback(tmp_path
 
 def test_main_turns_any_file_error_into_a_message(monkeypatch, capsys):
     # The last resort for a handler without a message of its own: the file and the reason.
-    from casa_core.cli import data
+    from casa_core.cli import validate
 
     def fails(args):
         raise PermissionError(13, "Permission denied", "/lab/out/trials.csv")
 
-    monkeypatch.setattr(data, "_validate", fails)
+    monkeypatch.setattr(validate, "_validate", fails)
     assert main(["validate", "anything"]) == 1
     error = capsys.readouterr().err
     assert error.startswith("casa validate: cannot read or write /lab/out/trials.csv: ")

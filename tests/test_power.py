@@ -232,6 +232,14 @@ def test_a_detections_table_without_a_column_is_named(tmp_path, capsys):
     assert "detections table" in capsys.readouterr().err
 
 
+def test_a_detections_file_that_cannot_be_read_exits_1(tmp_path, capsys):
+    # A file that cannot be read is 1, a table that cannot be used 2 (casa_core/cli/_errors.py).
+    missing = str(tmp_path / "none.csv")
+    assert main(["power", "table", "--detections", missing, "--out", str(tmp_path / "p.csv")]) == 1
+    error = capsys.readouterr().err
+    assert error.startswith("casa power table: ") and "none.csv" in error, error
+
+
 def test_the_figure_has_a_panel_per_hypothesis_and_metric():
     rows = []
     for hypothesis in ("H1", "H2", "H3"):

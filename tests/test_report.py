@@ -173,5 +173,5 @@ def test_cli_bad_stats_csv_names_the_missing_columns(tmp_path, capsys):
     args = ["report", "summary", "--stats", str(stats), "--dataset", "lab"]
     status = main([*args, "--out-md", str(tmp_path / "s.md"), "--out-html", str(tmp_path / "s")])
     err = capsys.readouterr().err
-    assert status == 1 and "stats table" in err and "task" in err and "Traceback" not in err
+    assert status == 2 and "stats table" in err and "task" in err and "Traceback" not in err
     assert not (tmp_path / "s.md").exists()

@@ -327,7 +327,7 @@ def test_the_claims_command_names_a_table_that_lacks_a_column(tmp_path, capsys):
     pd.read_csv(paths["steps"]).drop(columns="alpha").to_csv(paths["steps"], index=False)
     argv = ["report", "claims", *(f"--{name}={path}" for name, path in paths.items())]
     argv += ["--variant", "x", "--out", str(tmp_path / "claims.csv")]
-    assert cli.main(argv) == 1
+    assert cli.main(argv) == 2
     error = capsys.readouterr().err
     assert "steps table" in error and "alpha" in error, error
     assert not (tmp_path / "claims.csv").exists()

@@ -1,10 +1,30 @@
 """The ``casa`` command line: thin wrappers over the package.
 
-Each module adds a few commands (``register``) and holds their handlers: each loads its
-inputs once, calls the package and reports.
-An input file that cannot be used (:class:`~casa_core.config.ConfigError`,
-:class:`~casa_core.scene.SceneError`) ends the command with exit status 2 and a message
-naming the file and the key, without a traceback.
+One module per command, named after it; each adds its command (``register``) and holds
+its handlers: each loads its inputs once, calls the package and reports.
+
+- :mod:`~casa_core.cli.validate`: ``casa validate``
+- :mod:`~casa_core.cli.process`: ``casa process``
+- :mod:`~casa_core.cli.stats`: ``casa stats``
+- :mod:`~casa_core.cli.import_`: ``casa import`` (``import`` is a Python keyword)
+- :mod:`~casa_core.cli.teleop`: ``casa teleop``
+- :mod:`~casa_core.cli.bench`: ``casa bench``
+- :mod:`~casa_core.cli.session`: ``casa session``
+- :mod:`~casa_core.cli.figure`: ``casa figure``
+- :mod:`~casa_core.cli.learn`: ``casa learn``
+- :mod:`~casa_core.cli.library`: ``casa library``
+- :mod:`~casa_core.cli.simulate`: ``casa simulate``
+- :mod:`~casa_core.cli.case_study`: ``casa case-study``
+- :mod:`~casa_core.cli.replay`: ``casa replay``
+- :mod:`~casa_core.cli.report`: ``casa report`` (its claims and robustness pages included)
+- :mod:`~casa_core.cli.power`: ``casa power``
+- :mod:`~casa_core.cli.progress`: ``casa progress``
+
+An input that cannot be used (:class:`~casa_core.config.ConfigError`,
+:class:`~casa_core.scene.SceneError`, a bad table) ends the command with exit status 2
+and a message naming the file and the key, without a traceback; a file that cannot be
+read or written ends it with exit status 1. ``cli/_errors.py`` gives the handlers the
+same rule; ``casa validate`` finding problems in the files it read also exits 1.
 """
 
 from __future__ import annotations
@@ -13,7 +33,24 @@ import argparse
 import sys
 
 from casa_core import __version__
-from casa_core.cli import data, figure, learning, power, replay, report, robot, session, study
+from casa_core.cli import (
+    bench,
+    case_study,
+    figure,
+    import_,
+    learn,
+    library,
+    power,
+    process,
+    progress,
+    replay,
+    report,
+    session,
+    simulate,
+    stats,
+    teleop,
+    validate,
+)
 from casa_core.cli._options import ExampleFormatter, example
 
 #: Examples of the commands whose module gives none, by their ``prog``.
@@ -46,7 +83,24 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"casa {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (data, robot, session, figure, learning, study, replay, report, power):
+    for module in (
+        validate,
+        process,
+        stats,
+        import_,
+        teleop,
+        bench,
+        session,
+        figure,
+        learn,
+        library,
+        simulate,
+        case_study,
+        replay,
+        report,
+        power,
+        progress,
+    ):
         module.register(commands)
     for command in all_parsers(parser)[1:]:
         if command.epilog is None and command.prog in EXAMPLES:

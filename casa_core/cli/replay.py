@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from casa_core import vocabulary
+from casa_core.cli._errors import fail
 from casa_core.cli._options import example, nonnegative_float, positive_float
 
 #: Methods whose trials found in a folder are replayed unless --methods says otherwise.
@@ -85,26 +86,24 @@ def register(commands) -> None:
     command.set_defaults(func=_replay)
 
 
-def _fail(message: str) -> int:
-    print(f"casa replay: {message}", file=sys.stderr)
-    return 2
-
-
 def _replay(args) -> int:
     from casa_core.assist.assistant import ARBITRATIONS
     from casa_core.defaults import EPSILON
     from casa_core.scene import load_scene
 
     if args.arbitration is not None and args.arbitration not in ARBITRATIONS:
-        return _fail(
-            f"--arbitration {args.arbitration!r}: expected one of {', '.join(ARBITRATIONS)}"
+        return fail(
+            "replay",
+            f"--arbitration {args.arbitration!r}: expected one of {', '.join(ARBITRATIONS)}",
         )
     if args.intents is not None and not Path(args.intents).exists():
-        return _fail(f"--intents {args.intents}: no such file or folder")
+        return fail("replay", f"--intents {args.intents}: no such file or folder")
     given = load_scene(args.scene) if args.scene else None
     trials, problems, missing = _collect(args.paths)
     if missing:
-        return _fail("; ".join(f"{path}: no such trial, file or folder" for path in missing))
+        return fail(
+            "replay", "; ".join(f"{path}: no such trial, file or folder" for path in missing)
+        )
     for problem in problems:
         print(problem, file=sys.stderr)
     if any(problem.is_error for problem in problems) and not args.allow_invalid:
@@ -115,9 +114,10 @@ def _replay(args) -> int:
     seen: dict[Path, Path] = {}
     for trial in trials:
         if trial["stem"] in seen:
-            return _fail(
+            return fail(
+                "replay",
                 f"{trial['file']} and {seen[trial['stem']]} would both be written as "
-                f"{trial['stem']}.replay.csv; replay them separately"
+                f"{trial['stem']}.replay.csv; replay them separately",
             )
         seen[trial["stem"]] = trial["file"]
     scenes: dict[Path, object] = {}

@@ -1,12 +1,18 @@
-"""``casa report``: the pages of the HTML report (``snakemake --report``) from the tables."""
+"""``casa report``: the pages of the HTML report (``snakemake --report``) from the tables.
+
+Also the claims under each modelling variant: ``casa report claims`` judges one variant's
+tables (:func:`casa_core.stats.claims.evaluate_claims`) into a table with a ``variant``
+column; ``casa report robustness`` merges the variants' tables into ``claims.csv``, its
+``results.md`` and the figure (workflow/rules/robustness.smk).
+"""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-from casa_core.cli import robustness
-from casa_core.cli._options import example
+from casa_core.cli._errors import fail
+from casa_core.cli._options import example, positive_float
+from casa_core.defaults import EPSILON
 from casa_core.io import read_table
 
 #: One example per page, shown by each command's --help.
@@ -26,6 +32,31 @@ _EXAMPLES = {
     "data/processed/case_study/steps.csv --epsilon 1.0 "
     "--out data/processed/simulated/results.md --out-html data/report/simulated/results.html",
 }
+#: The examples of the pages of the claims under each variant.
+_CLAIMS_EXAMPLE = (
+    "casa report claims --trials data/processed/robustness/paper/trials.csv \\",
+    "    --steps data/processed/robustness/paper/steps.csv "
+    "--stats data/processed/robustness/paper/stats.csv \\",
+    "    --variant paper --config data/interim/robustness/paper/config.yaml "
+    "--out data/processed/robustness/paper/claims.csv",
+)
+_MERGE_EXAMPLE = (
+    "casa report robustness --claims data/processed/robustness/*/claims.csv \\",
+    "    --out-csv data/processed/robustness/claims.csv "
+    "--out-md data/processed/robustness/results.md --figure figures/robustness",
+)
+
+
+#: The tables the claims are judged on (:func:`~casa_core.stats.claims.evaluate_claims`),
+#: as options: name and help; the first three are required.
+CLAIM_TABLES = (
+    ("trials", "trials.csv"),
+    ("steps", "steps.csv"),
+    ("stats", "stats.csv"),
+    ("likert", "likert.csv (optional)"),
+    ("arbitration", "the case study's arbitration.csv (optional)"),
+    ("case_steps", "the case study's steps.csv (optional)"),
+)
 
 
 def _example(*pages: str) -> dict:
@@ -33,8 +64,28 @@ def _example(*pages: str) -> dict:
     return example(*(line for page in pages for line in _EXAMPLES[page].split("\n")))
 
 
+def add_claim_options(command) -> None:
+    """The options of the claims' inputs: ``--trials`` to ``--case-steps``, ``--epsilon``."""
+    for index, (name, what) in enumerate(CLAIM_TABLES):
+        option = "--" + name.replace("_", "-")
+        command.add_argument(option, required=index < 3, metavar="CSV", help=what)
+    command.add_argument(
+        "--epsilon",
+        type=positive_float,
+        default=EPSILON,
+        help=f"the misspecification threshold on beta_hat (default {EPSILON:g})",
+    )
+
+
+def read_claim_tables(args) -> dict:
+    """The tables of :data:`CLAIM_TABLES` that ``args`` names, read; None for the others."""
+
+    paths = {name: getattr(args, name) for name, _ in CLAIM_TABLES}
+    return {name: read_table(path) if path else None for name, path in paths.items()}
+
+
 def register(commands) -> None:
-    """Add this module's commands to the ``casa`` subcommands."""
+    """Add ``casa report`` and its pages to the ``casa`` subcommands."""
     command = commands.add_parser(
         "report",
         help="the HTML report's pages: results summary, rendered Markdown, browsable tables",
@@ -56,7 +107,7 @@ def register(commands) -> None:
         help="each claim of the paper with its criterion, the numbers and a verdict",
         **_example("results"),
     )
-    robustness.add_claim_options(results)
+    add_claim_options(results)
     results.add_argument("--dataset", required=True, help="the dataset's name, for the title")
     results.add_argument(
         "--operator", help="the simulated operator model, named for a simulated dataset"
@@ -81,13 +132,38 @@ def register(commands) -> None:
     table.add_argument("--out", required=True, metavar="HTML")
     table.add_argument("--title", help="the heading (default: the file's name)")
     table.set_defaults(func=_table)
-    # The claims under each modelling variant (casa_core/cli/robustness.py).
-    robustness.register_pages(pages)
+    # The claims under each modelling variant.
+    _add_variant_pages(pages)
 
 
-def _fail(error: Exception) -> int:
-    print(f"casa report: {error}", file=sys.stderr)
-    return 1
+def _add_variant_pages(pages) -> None:
+    """Add ``claims`` and ``robustness`` to the subcommands of ``casa report``."""
+    claims = pages.add_parser(
+        "claims",
+        help="one modelling variant's claims as a table (claim, variant, verdict, value)",
+        **example(*_CLAIMS_EXAMPLE),
+    )
+    add_claim_options(claims)
+    claims.add_argument("--variant", required=True, help="the variant's name")
+    claims.add_argument(
+        "--config", metavar="YAML", help="the variant's config, for its settings (optional)"
+    )
+    claims.add_argument("--out", required=True, metavar="CSV", help="claims.csv to write")
+    claims.set_defaults(func=_claims)
+    merge = pages.add_parser(
+        "robustness",
+        help="the variants' claims in one table, its results.md and the figure",
+        **example(*_MERGE_EXAMPLE),
+    )
+    merge.add_argument(
+        "--claims", required=True, nargs="+", metavar="CSV", help="each variant's claims.csv"
+    )
+    merge.add_argument("--out-csv", required=True, metavar="CSV", help="the merged table")
+    merge.add_argument("--out-md", required=True, metavar="MD", help="results.md to write")
+    merge.add_argument(
+        "--figure", required=True, metavar="PREFIX", help="writes PREFIX.pdf and PREFIX.png"
+    )
+    merge.set_defaults(func=_robustness)
 
 
 def _summary(args) -> int:
@@ -98,7 +174,7 @@ def _summary(args) -> int:
     try:
         text = summary_markdown(read_table(args.stats), dataset=args.dataset)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     atomic_write_text(args.out_md, text)
     title = f"Results of dataset {args.dataset}"
     atomic_write_text(
@@ -115,11 +191,11 @@ def _results(args) -> int:
     from casa_core.stats.results import results_markdown
 
     try:
-        tables = robustness.read_claim_tables(args)
+        tables = read_claim_tables(args)
         claims = evaluate_claims(tables, epsilon=args.epsilon)
         text = results_markdown(claims, tables, dataset=args.dataset, operator=args.operator)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     atomic_write_text(args.out, text)
     written = [args.out]
     if args.out_html:
@@ -139,7 +215,7 @@ def _markdown(args) -> int:
     try:
         text = Path(args.markdown).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as error:
-        return _fail(error)
+        return fail("report", error)
     body = report_pages.markdown_html(text)
     atomic_write_text(args.out, report_pages.page(body, title=Path(args.markdown).name))
     print(f"casa report: {args.out}")
@@ -153,10 +229,54 @@ def _table(args) -> int:
     try:
         frame = read_table(args.table)
     except (OSError, ValueError) as error:
-        return _fail(error)
+        return fail("report", error)
     title = args.title or Path(args.table).name
     note = f"{len(frame)} row(s) of {args.table}."
     body = report_pages.table_html(frame, title=title, note=note)
     atomic_write_text(args.out, report_pages.page(body, title=title))
     print(f"casa report: {len(frame)} row(s) -> {args.out}")
+    return 0
+
+
+def _claims(args) -> int:
+    from casa_core.io.atomic import write_csv
+    from casa_core.stats.claims import evaluate_claims
+    from casa_core.stats.robustness import variant_claims
+
+    settings = ""
+    if args.config:
+        # A ConfigError names the file and the key (exit status 2, casa_core/cli/__init__.py).
+        from casa_core.config import load_config
+        from casa_core.experiments.robustness import settings_text
+
+        settings = settings_text(load_config(args.config))
+    try:
+        tables = read_claim_tables(args)
+        claims = evaluate_claims(tables, epsilon=args.epsilon)
+    except (OSError, ValueError) as error:
+        return fail("report", error)
+    rows = variant_claims(claims, variant=args.variant, settings=settings)
+    write_csv(args.out, rows)
+    verdicts = ", ".join(f"{r.claim} {r.verdict}" for r in rows.itertuples())
+    print(f"casa report claims: {args.variant}: {verdicts} -> {args.out}")
+    return 0
+
+
+def _robustness(args) -> int:
+    from casa_core.figures.robustness import robustness_figure
+    from casa_core.figures.style import save_figure
+    from casa_core.io.atomic import atomic_write_text, write_csv
+    from casa_core.stats.robustness import merge_variants, robustness_markdown
+
+    try:
+        merged = merge_variants([read_table(path) for path in args.claims])
+        text = robustness_markdown(merged)
+        fig = robustness_figure(merged)
+    except (OSError, ValueError) as error:
+        return fail("report", error)
+    write_csv(args.out_csv, merged)
+    atomic_write_text(args.out_md, text)
+    written = [args.out_csv, args.out_md, *map(str, save_figure(fig, args.figure))]
+    variants = merged["variant"].nunique()
+    print(f"casa report robustness: {variants} variant(s) -> {', '.join(written)}")
     return 0

@@ -1,4 +1,4 @@
-"""``casa learn`` and ``casa library``: intents learned from demonstrations, and their files."""
+"""``casa learn``: a new intent learned from demonstration logs, into an intent library."""
 
 from __future__ import annotations
 
@@ -9,12 +9,7 @@ from casa_core.cli._options import example, nonnegative_int, positive_int, scene
 
 
 def register(commands) -> None:
-    """Add this module's commands to the ``casa`` subcommands."""
-    _add_learn(commands)
-    _add_library(commands)
-
-
-def _add_learn(commands) -> None:
+    """Add ``casa learn`` to the ``casa`` subcommands."""
     command = commands.add_parser(
         "learn",
         help="learn a new intent from demonstration logs (deep MaxEnt IRL) into a library",
@@ -80,52 +75,3 @@ def _learn(args) -> int:
         f"D^phi ends {last['end_distance_m'] * 100:.1f} cm from the demos' -> {path}"
     )
     return 0
-
-
-def _add_library(commands) -> None:
-    command = commands.add_parser(
-        "library",
-        help="inspect an intent library",
-        description="Inspect the learned intents (casa-intent files) of a library folder.",
-        **example("casa library list data/processed/simulated/intents"),
-    )
-    actions = command.add_subparsers(dest="action", metavar="ACTION", required=True)
-    listing = actions.add_parser(
-        "list",
-        help="one line per learned intent; damaged files are reported, not fatal",
-        description="Print one line per intent file of DIR; if DIR holds none, of every "
-        "library below it (e.g. one folder per participant), with its folder. Report each "
-        "unusable file on stderr with the rule it breaks; exit 1 if any file is unusable or "
-        "no intent file is found.",
-        **example("casa library list data/processed/simulated/intents"),
-    )
-    listing.add_argument("library", metavar="DIR")
-    listing.set_defaults(func=_library_list)
-
-
-def _library_list(args) -> int:
-    from pathlib import Path
-
-    from casa_core.learning import library
-
-    root = Path(args.library)
-    if not root.is_dir():
-        _, problems = library.scan_library(root)  # the one "is not a folder" problem
-        for problem in problems:
-            print(f"casa library: {problem}", file=sys.stderr)
-        return 1
-    folders = library.find_libraries(root)
-    if not folders:
-        print(f"casa library: no *{library.SUFFIX} file in {root} or below", file=sys.stderr)
-        return 1
-    n_problems = 0
-    for folder in folders:
-        # Each folder is one library: names are unique within it, not across participants.
-        entries, problems = library.scan_library(folder)
-        where = "" if folder == root else f"\tlibrary={folder.relative_to(root).as_posix()}"
-        for entry in entries:
-            print(entry.summary() + where)
-        for problem in problems:
-            print(f"casa library: {problem}", file=sys.stderr)
-        n_problems += len(problems)
-    return 1 if n_problems else 0

@@ -1,4 +1,4 @@
-"""``casa simulate`` and ``casa case-study``: the simulated study, one workflow job per call."""
+"""``casa simulate``: one participant of the simulated study, one workflow job per call."""
 
 from __future__ import annotations
 
@@ -7,43 +7,14 @@ from typing import TYPE_CHECKING
 
 from casa_core import vocabulary
 from casa_core.cli._options import example, positive_int
+from casa_core.cli._workflow import add_config_option, load_workflow_config
 
 if TYPE_CHECKING:
     from casa_core.scene import Scene
 
-#: The config the workflow commands read when no --config is given (working directory).
-WORKFLOW_CONFIG = "config/config.yaml"
-
 
 def register(commands) -> None:
-    """Add this module's commands to the ``casa`` subcommands."""
-    _add_simulate(commands)
-    _add_case_study(commands)
-
-
-def _load_config(args) -> tuple[dict, Scene]:
-    """The validated workflow config (``--config``, repeatable) and the scene it names.
-
-    Read once, here, at the edge; a ConfigError or SceneError names the file and the key.
-    """
-    from casa_core.config import load_config
-    from casa_core.scene import load_scene
-
-    config = load_config(*(args.config or [WORKFLOW_CONFIG]))
-    return config, load_scene(config["scene"])
-
-
-def _add_config_option(command) -> None:
-    command.add_argument(
-        "--config",
-        action="append",
-        metavar="YAML",
-        help=f"workflow config (default {WORKFLOW_CONFIG}); repeat to overlay files in order, "
-        "e.g. --config config/config.yaml --config config/ci.yaml",
-    )
-
-
-def _add_simulate(commands) -> None:
+    """Add ``casa simulate`` to the ``casa`` subcommands."""
     command = commands.add_parser(
         "simulate",
         help="simulate one participant of the study (one stage, or the whole protocol)",
@@ -66,7 +37,7 @@ def _add_simulate(commands) -> None:
         "task's intent; after: CASA after learning and the surveys; protocol: the three, "
         "each unknown task learned; learning-table: gather the learn rows into one CSV",
     )
-    _add_config_option(command)
+    add_config_option(command)
     command.add_argument(
         "--participant",
         type=positive_int,
@@ -160,7 +131,7 @@ def _run_stage(args) -> int:
                 write_csv(out, table)
                 print(f"casa simulate learning-table: {len(table)} learned intent(s) -> {out}")
         return 0
-    config, scene = _load_config(args)
+    config, scene = load_workflow_config(args)
     settings = StudySettings.from_config(config)
     index = args.participant - 1
     pid = simulate.participant_id(index)
@@ -224,46 +195,3 @@ def _protocol(args, index: int, scene: Scene, *, settings) -> list:
     for path, row in tables:
         write_csv(path, pd.DataFrame([row]))
     return [*run.before, *run.learned, *run.after, *(path for path, _ in tables)]
-
-
-def _add_case_study(commands) -> None:
-    command = commands.add_parser(
-        "case-study",
-        help="the expert case study and the arbitration comparison",
-        description="Run the simulated expert through the tasks (learning included) and the "
-        "three arbitrations along one trajectory; write steps.csv and arbitration.csv.",
-        **example(
-            "casa case-study --work data/interim/case_study "
-            "--steps data/processed/case_study/steps.csv \\",
-            "    --arbitration data/processed/case_study/arbitration.csv",
-        ),
-    )
-    _add_config_option(command)
-    command.add_argument("--work", required=True, help="folder for the expert's logs and intents")
-    command.add_argument("--steps", required=True, help="steps.csv to write")
-    command.add_argument("--arbitration", required=True, help="arbitration.csv to write")
-    command.set_defaults(func=_case_study)
-
-
-def _case_study(args) -> int:
-    from pathlib import Path
-
-    from casa_core.io import LogError
-    from casa_core.io.atomic import write_csv
-    from casa_core.study import simulate
-    from casa_core.study.settings import StudySettings
-
-    config, scene = _load_config(args)
-    try:
-        steps, arbitration = simulate.run_case_study(
-            scene,
-            StudySettings.from_case_study(config),
-            work_dir=Path(args.work),
-        )
-    except (LogError, OSError, ValueError) as error:
-        print(f"casa case-study: {error}", file=sys.stderr)
-        return 2
-    write_csv(args.steps, steps)
-    write_csv(args.arbitration, arbitration)
-    print(f"casa case-study: {len(steps)} step row(s), {len(arbitration)} arbitration row(s)")
-    return 0

@@ -1,0 +1,87 @@
+"""``casa stats``: the study's statistics (H1-H4), stats.csv and its APA-style report."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from casa_core.cli._errors import cannot_write
+from casa_core.cli._options import example
+from casa_core.io import read_table
+
+
+def register(commands) -> None:
+    """Add ``casa stats`` to the ``casa`` subcommands."""
+    command = commands.add_parser(
+        "stats",
+        help="the study's statistics (H1-H4): stats.csv and an APA-style Markdown report",
+        description="Run the study's analyses on trials.csv (and likert.csv) and write "
+        "stats.csv and its APA-style rendering.",
+        **example(
+            "casa stats --trials data/processed/mine/trials.csv "
+            "--likert data/processed/mine/likert.csv \\",
+            "    --out-csv data/processed/mine/stats.csv --out-md data/processed/mine/stats.md",
+        ),
+    )
+    command.add_argument("--trials", required=True, metavar="CSV", help="trials.csv")
+    command.add_argument("--likert", metavar="CSV", help="likert.csv (optional)")
+    command.add_argument("--out-csv", required=True, metavar="CSV", help="stats.csv to write")
+    command.add_argument("--out-md", required=True, metavar="MD", help="report to write")
+    command.add_argument(
+        "--margin",
+        action="append",
+        default=[],
+        metavar="[TASK:]METRIC=VALUE",
+        help="a non-inferiority margin in the metric's unit (repeatable; the workflow "
+        "passes the config's statistics.noninferiority_margins)",
+    )
+    command.add_argument(
+        "--margin-fraction",
+        action="append",
+        default=[],
+        metavar="[TASK:]METRIC=VALUE",
+        help="a margin as a fraction of the reference condition's mean (repeatable; "
+        "statistics.noninferiority_fractions)",
+    )
+    command.set_defaults(func=_stats)
+
+
+def _stats(args) -> int:
+    from casa_core import stats
+    from casa_core.io.atomic import atomic_paths, frame_to_csv_text
+    from casa_core.stats.margins import Margins, parse_margin
+
+    try:
+        margins = Margins(
+            absolute=dict(parse_margin(text, "--margin") for text in args.margin),
+            fractions=dict(
+                parse_margin(text, "--margin-fraction") for text in args.margin_fraction
+            ),
+        )
+    except ValueError as error:
+        print(f"casa stats: {error}", file=sys.stderr)
+        return 2
+    try:
+        # read_table keeps the method "NA" as text (pandas' default would make it missing).
+        trials = read_table(args.trials)
+        likert = read_table(args.likert) if args.likert else None
+        table = stats.analyze_study(trials, likert, margins=margins)
+        report = stats.report_markdown(table, trials=trials)
+    except (OSError, ValueError) as error:
+        print(f"casa stats: {error}", file=sys.stderr)
+        return 1
+    texts = (frame_to_csv_text(table), report)
+    try:
+        # The table and its report belong together: both or neither are replaced.
+        with atomic_paths(args.out_csv, args.out_md) as temporaries:
+            for tmp, text in zip(temporaries, texts, strict=True):
+                tmp.write_bytes(text.encode("utf-8"))
+    except OSError as error:
+        folder = Path(error.filename).parent if error.filename else Path(args.out_csv).parent
+        return cannot_write("stats", folder, error)
+    # A test that ran has a p-value or an estimate; a skipped one has neither.
+    skipped = int((table["p"].isna() & table["estimate"].isna()).sum())
+    print(f"casa stats: {len(table)} row(s) -> {args.out_csv}, {args.out_md}")
+    if skipped:
+        print(f"casa stats: {skipped} test(s) skipped, see their note", file=sys.stderr)
+    return 0

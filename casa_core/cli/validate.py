@@ -1,0 +1,61 @@
+"""``casa validate``: check trial logs and surveys against the casa-trial/1 contract."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from casa_core.cli._errors import cannot_write
+from casa_core.cli._options import example
+
+
+def register(commands) -> None:
+    """Add ``casa validate`` to the ``casa`` subcommands."""
+    command = commands.add_parser(
+        "validate",
+        help="check trial logs and surveys against the casa-trial/1 contract",
+        description="Check files and folders (recursively) against casa-trial/1; print every "
+        "problem with file, row or key, and rule; exit 1 if any (0 with --allow-invalid).",
+        **example("casa validate data/raw/mine --report data/processed/mine/validation.csv"),
+    )
+    command.add_argument("paths", nargs="+", metavar="PATH", help="a log file or a folder")
+    command.add_argument("--report", metavar="CSV", help="also write validation.csv here")
+    command.add_argument(
+        "--allow-invalid",
+        action="store_true",
+        help="report bad files as excluded and exit 0 (the DAG then leaves them out)",
+    )
+    command.set_defaults(func=_validate)
+
+
+def _validate(args) -> int:
+    from casa_core.analysis import datasets
+    from casa_core.io import check_paths
+
+    if args.report:
+        try:
+            checks = datasets.write_validation(
+                args.paths, args.report, allow_invalid=args.allow_invalid
+            )
+        except OSError as error:
+            return cannot_write("validate", Path(args.report).parent, error)
+    else:
+        checks = check_paths(args.paths)
+    problems = [problem for check in checks for problem in check.problems]
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    # A path that does not exist, or a folder without logs, is a problem but not a file.
+    files = [check for check in checks if check.kind not in ("missing", "folder")]
+    verdict = "excluded" if args.allow_invalid else "invalid"
+    bad_files = sum(not check.ok for check in files)
+    for check in checks:
+        if check.kind == "missing":
+            print(f"casa validate: {check.file} does not exist", file=sys.stderr)
+    errors = [problem for problem in problems if problem.is_error]
+    warned = f" ({len(problems) - len(errors)} warning(s))" if len(errors) < len(problems) else ""
+    print(
+        f"casa validate: {len(files)} file(s) checked, {bad_files} {verdict}, "
+        f"{len(problems)} problem(s){warned}",
+        file=sys.stderr,
+    )
+    return 1 if errors and not args.allow_invalid else 0
