@@ -9,8 +9,6 @@ from casa_core import vocabulary
 from casa_core.cli._errors import fail
 from casa_core.cli._options import example, nonnegative_float, positive_float
 
-#: Methods whose trials found in a folder are replayed unless --methods says otherwise.
-ASSISTED = ("PBA", "CASA")
 #: The columns of ``replay.csv``, one row per trial.
 SUMMARY_COLUMNS = [
     "trial",
@@ -77,7 +75,7 @@ def register(commands) -> None:
         "--methods",
         nargs="+",
         choices=vocabulary.METHODS,
-        default=list(ASSISTED),
+        default=list(vocabulary.ASSISTED_METHODS),
         help="methods of the trials found in folders to replay (default: PBA CASA)",
     )
     command.add_argument(
@@ -169,10 +167,11 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
     from casa_core.figures.replay import replay_figure
     from casa_core.figures.style import save_figure
     from casa_core.io import write_csv
+    from casa_core.io.contract import CONDITION_KEYS
 
     check = trial["check"]
     meta = check.meta or {}
-    row = {key: meta.get(key, "") for key in ("participant", "task", "method", "phase")}
+    row = {key: meta.get(key, "") for key in CONDITION_KEYS}
     row["trial"] = trial["stem"].as_posix()
     if not check.ok:
         return {**row, "status": "invalid", "reason": str(check.errors[0])}
