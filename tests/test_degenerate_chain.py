@@ -19,11 +19,11 @@ import pandas as pd
 import pytest
 from test_logs_synthetic import CONDITIONS, SCENE, trial_frame, write_dataset
 
-from casa_core.analysis.datasets import build_tables, read_table, write_tables
+from casa_core.analysis.datasets import build_tables, write_tables
 from casa_core.figures import likert_figure, objective_figure
 from casa_core.figures._bars import wilson_interval
 from casa_core.figures.build import build_figure
-from casa_core.io import SURVEY_COLUMNS, check_paths, write_surveys, write_trial
+from casa_core.io import SURVEY_COLUMNS, check_paths, read_table, write_surveys, write_trial
 from casa_core.io.atomic import frame_to_csv_text
 from casa_core.report import pages as report_pages
 from casa_core.stats import (
