@@ -9,8 +9,6 @@ from pathlib import Path
 
 import pytest
 import yaml
-from test_logs_synthetic import ROOT, write_dataset
-from test_workflow import ENV, copy_workflow, snakemake
 
 from casa_core import defaults
 from casa_core.assist import assistant, presets
@@ -23,6 +21,8 @@ from casa_core.config import (
     schema,
     validate_config,
 )
+from tests.io.test_logs_synthetic import ROOT, write_dataset
+from tests.workflow.test_workflow import ENV, copy_workflow, snakemake
 
 CONFIG = ROOT / "config" / "config.yaml"
 CI = ROOT / "config" / "ci.yaml"
