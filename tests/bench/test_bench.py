@@ -5,12 +5,6 @@ import pytest
 
 from casa_core.bench import protocol as bench_protocol
 from casa_core.bench import suite as bench
-from casa_core.scene import load_scene
-
-
-@pytest.fixture(scope="module")
-def scene():
-    return load_scene()
 
 
 def test_linear_fit_recovers_an_exact_line_and_flags_a_curve():

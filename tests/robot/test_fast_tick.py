@@ -29,14 +29,8 @@ from casa_core.planning import optimize
 from casa_core.planning.pouring import PouringIntent
 from casa_core.robot import kinematics as kin
 from casa_core.robot.control_kernel import joint_velocities, joint_velocities_numpy, read_pose
-from casa_core.robot.sim import TOOL_LINK, ArmSimulation
+from casa_core.robot.sim import TOOL_LINK
 from casa_core.scene import load_scene
-
-
-@pytest.fixture(scope="module")
-def sim():
-    with ArmSimulation(load_scene()) as arm:
-        yield arm
 
 
 def _random_tick(rng, sim, scene):

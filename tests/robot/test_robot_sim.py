@@ -16,12 +16,7 @@ import yaml
 
 from casa_core.robot import kinematics as kin
 from casa_core.robot.sim import ArmSimulation
-from casa_core.scene import DEFAULT_SCENE, Scene, SceneError, load_scene
-
-
-@pytest.fixture(scope="module")
-def scene():
-    return load_scene()
+from casa_core.scene import DEFAULT_SCENE, Scene, SceneError
 
 
 @pytest.fixture()

@@ -22,11 +22,6 @@ def plants() -> pd.DataFrame:
 
 
 @pytest.fixture(scope="module")
-def sleep() -> pd.DataFrame:
-    return pd.read_csv(REF / "sleep.csv", dtype={"group": str})
-
-
-@pytest.fixture(scope="module")
 def female_penguins() -> pd.DataFrame:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -18,11 +18,6 @@ REF = Path(__file__).parents[1] / "reference" / "stats"
 
 
 @pytest.fixture(scope="module")
-def sleep() -> pd.DataFrame:
-    return pd.read_csv(REF / "sleep.csv", dtype={"group": str})
-
-
-@pytest.fixture(scope="module")
 def two_way() -> pd.DataFrame:
     # pingouin's "rm_anova2" dataset: 2 x 3 fully within design (Time x Metric).
     with warnings.catch_warnings():

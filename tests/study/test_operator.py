@@ -11,7 +11,6 @@ import pytest
 from casa_core.analysis import metrics
 from casa_core.assist.tasks import intended_trajectory
 from casa_core.config import load_config
-from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import load_scene
 from casa_core.study import simulate
 from casa_core.study.closed_loop import run_trial
@@ -27,12 +26,6 @@ SIMULATION = load_config("config/config.yaml")["simulation"]
 SCENE = load_scene()
 EXPERT = ParticipantParams(0.25, 0.003, 0.008, 0.0, 0.5, 0.0, 3)
 PARTICIPANTS = range(SIMULATION["participants"])
-
-
-@pytest.fixture(scope="module")
-def sim():
-    with ArmSimulation(SCENE) as arm:
-        yield arm
 
 
 def trial(sim, task, method, index, *, operator="predictive", params=None):

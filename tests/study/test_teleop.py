@@ -13,14 +13,8 @@ from casa_core.assist.presets import preset
 from casa_core.cli import build_parser, main
 from casa_core.io import read_trial, validate_paths
 from casa_core.robot import teleop
-from casa_core.scene import load_scene
 from casa_core.study.key_sources import ScriptedKeys
 from casa_core.study.teleop_session import run_teleop
-
-
-@pytest.fixture(scope="module")
-def scene():
-    return load_scene()
 
 
 def test_headless_teleop_writes_a_valid_log_and_never_overwrites(scene, tmp_path):

@@ -13,15 +13,9 @@ import pytest
 
 from casa_core.assist.tasks import intended_trajectory, task_waypoints
 from casa_core.io import read_trial, validate_paths
-from casa_core.scene import load_scene
 from casa_core.study.closed_loop import default_phase, known_goal_intents, run_trial
 from casa_core.study.key_sources import ScriptedKeys, WaypointKeys
 from casa_core.study.participants import ParticipantParams, SimulatedParticipant
-
-
-@pytest.fixture(scope="module")
-def scene():
-    return load_scene()
 
 
 def _expert(task, scene):
