@@ -194,6 +194,7 @@ def workflow_copy(tmp_path):
     return copy_workflow(tmp_path / "wf")
 
 
+@pytest.mark.pipeline
 @pytest.mark.parametrize(
     "where, old, new, message",
     [
@@ -224,6 +225,7 @@ def test_snakemake_dry_run_refuses_a_bad_config_naming_the_key(
         assert f"config/ci.yaml: {message}: unknown key" in text
 
 
+@pytest.mark.pipeline
 @pytest.mark.parametrize(
     "args, message",
     [
@@ -237,6 +239,7 @@ def test_snakemake_refuses_bad_command_line_config_naming_the_key(workflow_copy,
     assert message in result.stdout + result.stderr
 
 
+@pytest.mark.pipeline
 def test_snakemake_merges_the_ci_overlay_over_the_config(workflow_copy):
     result = snakemake(
         workflow_copy, "--dry-run", "--configfile", "config/ci.yaml", "--config", "simulate=false"

@@ -165,6 +165,7 @@ def repo(tmp_path):
     return tmp_path
 
 
+@pytest.mark.pipeline
 def test_statistics_beside_deleted_or_regenerated_tables_are_rebuilt(repo):
     assert snakemake(repo, *TARGET).returncode == 0
     processed = repo / "data" / "processed" / "pilot"
@@ -244,6 +245,7 @@ def _kill_when(repo: Path, point) -> None:
             pass
 
 
+@pytest.mark.pipeline
 def test_a_run_killed_anywhere_and_rerun_gives_the_bytes_of_an_uninterrupted_run(tmp_path):
     # The reference: the same DAG, never interrupted.
     reference = copy_workflow(tmp_path / "reference")

@@ -322,6 +322,7 @@ def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys, monkeypat
 # --- the workflow --------------------------------------------------------------------
 
 
+@pytest.mark.pipeline
 def test_a_dry_run_gives_each_replicate_its_jobs_seed_and_files(tmp_path):
     repo, jobs, counts = dry_run(tmp_path, "power")
     # ci.yaml: sizes 2, 3 and 2 replicates: 3 participants per replicate, one job each.

@@ -125,6 +125,7 @@ def dry_run(tmp_path, target: str):
     return repo, jobs, pd.Series([job["rule"] for job in jobs]).value_counts()
 
 
+@pytest.mark.pipeline
 def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
     repo, jobs, counts = dry_run(tmp_path, "robustness")
     # ci.yaml: 2 variants x 2 participants, one job each (its whole protocol).

@@ -120,6 +120,7 @@ def _fingerprint(folder: Path) -> dict[str, str]:
     return found
 
 
+@pytest.mark.pipeline
 def test_dag_over_the_whole_corpus_keeps_raw_data_and_reports_every_case(tmp_path):
     repo = _copy_workflow(tmp_path)
     raw = repo / "data" / "raw"

@@ -334,6 +334,7 @@ def test_the_scene_holds_the_tool_points_of_the_reference_angles():
     }
 
 
+@pytest.mark.pipeline
 def test_the_workflow_processes_an_imported_dataset_with_its_scene(sessions, tmp_path):
     from tests.workflow.test_workflow import copy_workflow, snakemake
 

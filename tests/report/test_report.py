@@ -72,6 +72,7 @@ def page(report) -> str:
     return dom[start : dom.index("<script", start)]
 
 
+@pytest.mark.pipeline
 @needs_chromium
 def test_the_landing_page_opens_on_results_then_figures_stats_tables_workflow(report, page):
     stats = read_table(report / "data" / "processed" / "pilot" / "stats.csv")
@@ -105,6 +106,7 @@ def test_the_landing_page_opens_on_results_then_figures_stats_tables_workflow(re
     assert page.count('placeholder="filter rows"') == 2
 
 
+@pytest.mark.pipeline
 @needs_chromium
 def test_screenshot_of_the_first_screen(report, page, tmp_path_factory):
     shot = tmp_path_factory.mktemp("screenshot") / "report.png"
@@ -117,6 +119,7 @@ def test_screenshot_of_the_first_screen(report, page, tmp_path_factory):
     assert shot.read_bytes()[:4] == b"\x89PNG" and shot.stat().st_size > 50_000
 
 
+@pytest.mark.pipeline
 @needs_chromium
 def test_the_report_pages_exist_for_the_menu_too(report):
     pages = report / "data" / "report" / "pilot"

@@ -406,6 +406,7 @@ def test_cli_writes_results_md_and_its_page(tmp_path, capsys):
     assert "steps table: missing column(s) 'alpha'" in capsys.readouterr().err
 
 
+@pytest.mark.pipeline
 def test_default_target_builds_results_md_for_every_dataset(tmp_path):
     repo = copy_workflow(tmp_path)
     write_dataset(repo / "data" / "raw" / "pilot", participants=("p01",))

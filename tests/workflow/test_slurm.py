@@ -58,7 +58,10 @@ def _skip_reason() -> str | None:
     return why_not()
 
 
-pytestmark = pytest.mark.skipif(_skip_reason() is not None, reason=str(_skip_reason()))
+pytestmark = [
+    pytest.mark.pipeline,
+    pytest.mark.skipif(_skip_reason() is not None, reason=str(_skip_reason())),
+]
 
 
 @pytest.fixture(scope="module")

@@ -23,6 +23,8 @@ BIN = Path(sys.executable).parent
 PROFILE = "profiles/default"
 ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
 
+pytestmark = pytest.mark.pipeline
+
 
 def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
