@@ -9,8 +9,6 @@ from pathlib import Path
 
 import pytest
 import yaml
-from test_logs_synthetic import ROOT, write_dataset
-from test_workflow import ENV, copy_workflow, snakemake
 
 import casa_core
 from casa_core import defaults
@@ -24,6 +22,8 @@ from casa_core.config import (
     schema,
     validate_config,
 )
+from tests.io.test_logs_synthetic import ROOT, write_dataset
+from tests.workflow.test_workflow import ENV, copy_workflow, snakemake
 
 CONFIG = ROOT / "config" / "config.yaml"
 CI = ROOT / "config" / "ci.yaml"
@@ -195,6 +195,7 @@ def workflow_copy(tmp_path):
     return copy_workflow(tmp_path / "wf")
 
 
+@pytest.mark.pipeline
 @pytest.mark.parametrize(
     "where, old, new, message",
     [
@@ -225,6 +226,7 @@ def test_snakemake_dry_run_refuses_a_bad_config_naming_the_key(
         assert f"config/ci.yaml: {message}: unknown key" in text
 
 
+@pytest.mark.pipeline
 @pytest.mark.parametrize(
     "args, message",
     [
@@ -238,6 +240,7 @@ def test_snakemake_refuses_bad_command_line_config_naming_the_key(workflow_copy,
     assert message in result.stdout + result.stderr
 
 
+@pytest.mark.pipeline
 def test_snakemake_merges_the_ci_overlay_over_the_config(workflow_copy):
     result = snakemake(
         workflow_copy, "--dry-run", "--configfile", "config/ci.yaml", "--config", "simulate=false"

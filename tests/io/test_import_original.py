@@ -1,0 +1,369 @@
+"""``casa import original``: the original implementation's session files as a casa-trial/1 dataset.
+
+Every session here is synthetic, built in ``tmp_path`` in the original's format
+(docs/data-contracts.md, "Importing the original implementation's sessions"): joint
+angles moving linearly from the original's start angles to its goal 0, a user command
+built from a known key, and inference arrays chosen so that each rule (negative beta,
+a 0/0 belief row, the alpha of each method) is exercised with a hand-computed answer.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from casa_core.cli import main
+from casa_core.io import read_trial
+from casa_core.io.original.importer import ORIGINAL_SCENE
+from casa_core.io.original.sessions import REFERENCE_ANGLES, reference_q
+from casa_core.robot import kinematics as kin
+from casa_core.scene import load_scene
+
+#: Sample times: about 18 Hz, irregular (steps of 0.05 and 0.06 s), 3.0 s in all.
+TIMES = np.cumsum(np.r_[0.0, np.tile([0.05, 0.06], 27), 0.03])
+DURATION = TIMES[-1]  # 3.0 s: ticks 0, 0.05, ..., 3.0
+#: Inference steps and what they logged (two goals).
+STEPS = np.array([0.5, 1.0, 1.5, 2.0, 2.5])
+BELIEFS = np.array([[0.5, 0.5], [0.6, 0.4], [np.nan, np.nan], [0.7, 0.3], [0.2, 0.8]])
+BETAS = np.array([[0.5, 0.5], [2.0, 1.0], [4.0, -1.0], [-0.5, 3.0], [1.0, 4.0]])
+#: CASA's alpha after each step, by hand: clip(1 / beta of the most likely goal, 0, 1), the
+#: 0/0 row carrying [0.6, 0.4] (goal 0 likely, beta 4), beta -0.5 giving 0.
+CASA_ALPHAS = [1.0, 0.5, 0.25, 0.0, 0.25]
+
+
+def joint_angles(t):
+    """Linear in time from the original's start to its goal 0, reached at DURATION."""
+    start, goal = reference_q("start"), reference_q("goal 0")
+    return start + np.outer(np.asarray(t) / DURATION, goal - start)
+
+
+def command_of(q, velocity, joint7=0.0):
+    """The joint velocity giving the tool ``velocity``, plus ``joint7`` on the last joint."""
+    command = np.linalg.pinv(kin.jacobian(q)[:3]) @ np.asarray(velocity, dtype=float)
+    command[6] += joint7
+    return command
+
+
+def session_arrays(n_goals=2, beta=True):
+    q = joint_angles(TIMES)
+    # z+ for the first second, then x- with rot+ (joint 7 backwards) to 2 s, then no key.
+    commands = np.zeros_like(q)
+    for i, t in enumerate(TIMES):
+        if t < 1.0:
+            commands[i] = command_of(q[i], [0, 0, 0.05])
+        elif t < 2.0:
+            commands[i] = command_of(q[i], [-0.05, 0, 0], joint7=-0.5)
+    beliefs = BELIEFS if n_goals == 2 else np.column_stack([BELIEFS * 0.5, np.full(5, 0.5)])
+    betas = BETAS if n_goals == 2 else np.column_stack([BETAS, np.ones(5)])
+    return {
+        "cmdpos_time": TIMES,
+        "curr_pos": q,
+        "joy_cmd": commands,
+        "ctl_cmd": np.zeros_like(q),
+        "cmd": commands,
+        "traj_hist": np.zeros((31, 7)),
+        "inf_start_time": STEPS,
+        "sub_hist": np.ones((5, n_goals)),
+        "belief_hist": beliefs,
+        "beta_hist": betas if beta else np.zeros(0),
+        "start_T": np.array(1.6e9),
+    }
+
+
+def write_session(folder, name, **changes):
+    arrays = session_arrays(**changes.pop("build", {}))
+    arrays.update(changes)
+    arrays = {key: value for key, value in arrays.items() if value is not None}
+    folder.mkdir(parents=True, exist_ok=True)
+    np.savez(folder / name, **arrays)
+    return folder / name
+
+
+@pytest.fixture
+def sessions(tmp_path):
+    folder = tmp_path / "sessions" / "P03"
+    write_session(folder, "task1c_data.npz")
+    write_session(folder, "task1b_data.npz")
+    write_session(folder, "task1a_data.npz", build={"beta": False})
+    write_session(folder, "task2c_learned_data.npz", build={"n_goals": 3})
+    write_session(folder, "task1ex_data.npz")
+    np.savez(folder / "task2_demonstrations.npz", demos=np.zeros((5, 10, 7)))
+    return folder
+
+
+def digest(folder):
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+
+
+def run_import(folder, out, *extra):
+    return main(["import", "original", str(folder), "--out", str(out), *extra])
+
+
+def held_at(times, values, t):
+    """The value of the last of ``times`` at or before ``t`` (None before the first)."""
+    before = [v for s, v in zip(times, values, strict=True) if s <= t + 1e-9]
+    return before[-1] if before else None
+
+
+def test_a_folder_of_sessions_becomes_a_valid_dataset(sessions, tmp_path, capsys):
+    before = digest(sessions)
+    out = tmp_path / "raw" / "original"
+    assert run_import(sessions, out) == 0
+    printed = capsys.readouterr().out
+    assert "skipped task1ex_data.npz: a worked example" in printed
+    assert "skipped task2_demonstrations.npz: demonstrations" in printed
+    assert digest(sessions) == before  # the session folder is only read
+    stems = sorted(p.stem for p in (out / "P03").glob("*.json"))
+    assert stems == ["task1a", "task1b", "task1c", "task2c_learned"]
+    assert (out / "scene.yaml").read_text() == ORIGINAL_SCENE.read_text()
+    assert main(["validate", str(out)]) == 0
+
+
+def test_metadata_from_the_file_name(sessions, tmp_path):
+    out = tmp_path / "out"
+    assert run_import(sessions, out, "--participant", "P3") == 0
+    expected = {
+        "task1a": ("known_goal", "NA", "no_misspecification", ["green", "purple"]),
+        "task1b": ("known_goal", "PBA", "no_misspecification", ["green", "purple"]),
+        "task1c": ("known_goal", "CASA", "no_misspecification", ["green", "purple"]),
+        "task2c_learned": (
+            "unknown_goal",
+            "CASA",
+            "after_learning",
+            ["green", "purple", "learned_red"],
+        ),
+    }
+    for stem, (task, method, phase, intents) in expected.items():
+        meta = json.loads((out / "P3" / f"{stem}.json").read_text())
+        assert (meta["task"], meta["method"], meta["phase"], meta["intents"]) == (
+            task,
+            method,
+            phase,
+            intents,
+        )
+        assert (meta["participant"], meta["source"], meta["max_duration"]) == ("P3", "human", 15.0)
+        assert f"session file {stem}_data.npz" in meta["notes"]
+        assert meta["started_at"] == "2020-09-13T12:26:40+00:00"  # start_T 1.6e9 s
+
+
+def test_positions_are_the_tool_point_of_the_joint_angles(sessions, tmp_path):
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 0
+    _, frame = read_trial(out / "P03" / "task1c")
+    # Ticks of 0.05 s from 0 to the last sample (3.0 s): 61 rows.
+    assert np.allclose(frame["t"], np.arange(61) * 0.05)
+    q = frame[[f"q{i}" for i in range(1, 8)]].to_numpy()
+    # The angles are linear in time, so linear interpolation is exact at every tick.
+    assert np.allclose(q, joint_angles(frame["t"]), atol=1e-12)
+    tool = np.array([kin.forward_kinematics(row)[:3, 3] for row in q])
+    assert np.allclose(frame[["x", "y", "z"]].to_numpy(), tool, atol=1e-12)
+    rot = [kin.rot_of(kin.forward_kinematics(row)[:3, :3]) for row in q]
+    assert np.allclose(frame["rot"], np.unwrap(rot), atol=1e-12)
+
+
+def test_keys_come_from_the_users_command(sessions, tmp_path):
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 0
+    _, frame = read_trial(out / "P03" / "task1c")
+    for t, keys in zip(frame["t"], frame["keys"], strict=True):
+        # The key of the last sample at or before the tick, as the session was built.
+        sample = held_at(TIMES, TIMES, t)
+        expected = "z+" if sample < 1.0 else "x- rot+" if sample < 2.0 else ""
+        assert keys == expected, t
+
+
+def test_casa_confidence_beliefs_and_alpha(sessions, tmp_path):
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 0
+    meta, frame = read_trial(out / "P03" / "task1c")
+    carried = BELIEFS.copy()
+    carried[2] = BELIEFS[1]  # the 0/0 row carries the last good row
+    for row in frame.itertuples():
+        step = held_at(STEPS, range(len(STEPS)), row.t)
+        if step is None:  # before the first step: no evidence
+            assert (row.alpha, row[frame.columns.get_loc("beta:green") + 1]) == (1.0, 0.0)
+            assert frame.loc[row.Index, ["belief:green", "belief:purple"]].tolist() == [0.5, 0.5]
+            continue
+        assert row.alpha == pytest.approx(CASA_ALPHAS[step])
+        betas = frame.loc[row.Index, ["beta:green", "beta:purple"]].to_numpy()
+        assert np.allclose(betas, np.maximum(BETAS[step], 0.0))  # negative betas -> 0
+        beliefs = frame.loc[row.Index, ["belief:green", "belief:purple"]].to_numpy()
+        assert np.allclose(beliefs, carried[step])
+    # Two negative betas (-1.0, -0.5) and one 0/0 belief row were built.
+    assert "negative betas written as 0: 2" in meta["notes"]
+    assert "belief rows carried from the last good row: 1" in meta["notes"]
+
+
+def test_pba_alpha_is_link7_distance_to_the_predicted_goal(sessions, tmp_path):
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 0
+    _, frame = read_trial(out / "P03" / "task1b")
+    goal = {
+        0: kin.link7_position(reference_q("goal 0")),
+        1: kin.link7_position(reference_q("goal 1")),
+    }
+    carried = BELIEFS.copy()
+    carried[2] = BELIEFS[1]
+    for row in frame.itertuples():
+        step = held_at(STEPS, range(len(STEPS)), row.t)
+        if step is None:
+            assert row.alpha == 1.0
+            continue
+        link7 = kin.link7_position(joint_angles([STEPS[step]])[0])
+        likely = int(np.argmax(carried[step]))
+        expected = min(1.0, np.linalg.norm(link7 - goal[likely]) / 0.55)
+        assert row.alpha == pytest.approx(expected)
+
+
+def test_na_without_betas(sessions, tmp_path):
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 0
+    meta, frame = read_trial(out / "P03" / "task1a")
+    assert (frame["alpha"] == 1.0).all()
+    assert not [c for c in frame.columns if c.startswith("beta:")]
+    assert "negative betas written as 0: 0" in meta["notes"]
+    assert {"belief:green", "belief:purple"} <= set(frame.columns)
+
+
+def test_rerun_refuses_to_overwrite_unless_forced(sessions, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 0
+    written = digest(out / "P03")
+    capsys.readouterr()
+    assert run_import(sessions, out) == 2
+    err = capsys.readouterr().err
+    assert f"{out / 'P03' / 'task1a.json'}: [exists]" in err and "nothing written" in err
+    assert digest(out / "P03") == written
+    assert run_import(sessions, out, "--force") == 0
+
+
+DAMAGED = [
+    ("truncated", "task1c_data.npz", "", "npz"),
+    ("no curr_pos", "task1c_data.npz", "key 'curr_pos'", "required-key"),
+    ("wrong shape", "task1c_data.npz", "key 'curr_pos'", "shape"),
+    ("decreasing time", "task1c_data.npz", "key 'cmdpos_time'", "increasing"),
+    ("rows", "task1c_data.npz", "key 'joy_cmd'", "rows"),
+    ("unknown name", "task3a_data.npz", "file name", "session-name"),
+]
+
+
+@pytest.mark.parametrize(("damage", "name", "where", "rule"), DAMAGED, ids=[d[0] for d in DAMAGED])
+def test_damaged_files_stop_the_import_naming_file_and_key(
+    sessions, tmp_path, capsys, damage, name, where, rule
+):
+    path = sessions / name
+    if damage == "truncated":
+        data = (sessions / "task1b_data.npz").read_bytes()
+        path.write_bytes(data[: len(data) // 2])
+    elif damage == "no curr_pos":
+        write_session(sessions, name, curr_pos=None)
+    elif damage == "wrong shape":
+        write_session(sessions, name, curr_pos=joint_angles(TIMES)[:, :6])
+    elif damage == "decreasing time":
+        write_session(sessions, name, cmdpos_time=TIMES[::-1].copy())
+    elif damage == "rows":
+        write_session(sessions, name, joy_cmd=np.zeros((3, 7)))
+    else:
+        write_session(sessions, name)
+    before = digest(sessions)
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: {where}: [{rule}]".replace(": : ", ": ") in err
+    assert "Traceback" not in err
+    assert not out.exists()  # nothing half-written
+    assert digest(sessions) == before
+    # --skip-bad lists the bad file and converts the others.
+    assert run_import(sessions, out, "--skip-bad") == 0
+    assert f"left out: {path}" in capsys.readouterr().out
+    assert not (out / "P03" / f"{name.removesuffix('_data.npz')}.json").exists()
+    assert (out / "P03" / "task1a.json").is_file()
+
+
+def test_the_dataset_is_processed_with_its_own_scene(sessions, tmp_path):
+    out = tmp_path / "raw" / "original"
+    assert run_import(sessions, out) == 0
+    tables = tmp_path / "processed"
+    argv = ["process", str(out), "--out", str(tables), "--scene", str(out / "scene.yaml")]
+    assert main(argv) == 0
+    trials = pd.read_csv(tables / "trials.csv", keep_default_na=False)
+    assert sorted(trials["trial"]) == [
+        "P03/task1a",
+        "P03/task1b",
+        "P03/task1c",
+        "P03/task2c_learned",
+    ]
+    assert main(["validate", str(out), "--report", str(tables / "validation.csv")]) == 0
+    validation = pd.read_csv(tables / "validation.csv", keep_default_na=False)
+    assert validation.set_index("file").loc["scene.yaml", ["kind", "status"]].tolist() == [
+        "scene",
+        "ok",
+    ]
+
+
+def test_validate_names_the_key_of_a_bad_dataset_scene(sessions, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert run_import(sessions, out) == 0
+    scene = out / "scene.yaml"
+    scene.write_text(scene.read_text().replace("  red:", "  blue:"))
+    capsys.readouterr()
+    assert main(["validate", str(out)]) == 1
+    assert f"{scene}: key 'goals.red': [scene] missing" in capsys.readouterr().err
+
+
+def test_the_scene_holds_the_tool_points_of_the_reference_angles():
+    scene = load_scene(ORIGINAL_SCENE)
+    roles = {"start": "start", "green": "goal 0", "purple": "goal 1", "red": "unknown goal"}
+    assert set(REFERENCE_ANGLES) == set(roles.values())
+    for name, reference in roles.items():
+        tool = kin.forward_kinematics(reference_q(reference))[:3, 3]
+        written = scene.start.position if name == "start" else scene.goals[name]
+        assert np.allclose(written, tool, atol=0.0005 + 1e-9), name  # rounded to 1 mm
+    assert scene.start.rot == 0.0
+    # The file is plain YAML with the scene's keys and nothing else.
+    assert set(yaml.safe_load(ORIGINAL_SCENE.read_text())) == {
+        "start",
+        "goals",
+        "pouring",
+        "teleop",
+    }
+
+
+@pytest.mark.pipeline
+def test_the_workflow_processes_an_imported_dataset_with_its_scene(sessions, tmp_path):
+    from tests.workflow.test_workflow import copy_workflow, snakemake
+
+    repo = copy_workflow(tmp_path / "repo")
+    assert run_import(sessions, repo / "data" / "raw" / "original") == 0
+    target = "data/processed/original/trials.csv"
+    # Targets before --config, which takes every word after it.
+    dry = snakemake(repo, target, "--dry-run", "--printshellcmds", "--config", "simulate=false")
+    assert dry.returncode == 0, dry.stderr
+    assert "--scene data/raw/original/scene.yaml" in dry.stdout
+    result = snakemake(repo, target, "--config", "simulate=false")
+    assert result.returncode == 0, result.stderr
+    trials = pd.read_csv(repo / target, keep_default_na=False)
+    assert len(trials) == 4 and set(trials["dataset"]) == {"original"}
+    # The default target takes the imported dataset all the way: its statistics, its
+    # figures and the replay of its assisted trials, with its own scene.
+    result = snakemake(repo, "--config", "simulate=false")
+    assert result.returncode == 0, result.stderr
+    replayed = pd.read_csv(repo / "data/processed/original/replay/replay.csv")
+    status = dict(zip(replayed["trial"], replayed["status"], strict=True))
+    # NA is not replayed by default; the original's learned intents are not imported.
+    assert status == {
+        "P03/task1a": "skipped",
+        "P03/task1b": "replayed",
+        "P03/task1c": "replayed",
+        "P03/task2c_learned": "skipped",
+    }
+    assert set(replayed.loc[replayed["status"] == "replayed", "preset"]) == {"original"}
+    assert list((repo / "figures/original/replay").rglob("*.replay.png"))
+    for name in ("objective.png", "objective.pdf"):
+        assert (repo / "figures/original" / name).stat().st_size > 0
+    assert (repo / "data/processed/original/stats.md").exists()

@@ -1,0 +1,225 @@
+"""The Snakemake DAG, run for real on a temporary copy of the workflow.
+
+Steps whose ``casa`` subcommand exists (validate, process) are run; the rest of
+the default target is checked with a dry run, which resolves every rule,
+wildcard and input without running it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.io.test_logs_synthetic import ROOT, write_dataset
+
+BIN = Path(sys.executable).parent
+# Not named: the README's plain command must read profiles/default by itself.
+PROFILE = "profiles/default"
+ENV = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
+
+pytestmark = pytest.mark.pipeline
+
+
+def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [str(BIN / "snakemake"), "--cores", "1", *args],
+        cwd=workdir,
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def copy_workflow(folder: Path) -> Path:
+    """The Snakefile, the workflow, its profiles and the configs copied into ``folder``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in ("Snakefile", "workflow", "config", "profiles"):
+        source = ROOT / name
+        if source.is_dir():
+            shutil.copytree(source, folder / name)
+        else:
+            shutil.copy(source, folder / name)
+    return folder
+
+
+@pytest.fixture
+def repo(tmp_path):
+    """The workflow and its configs copied next to a data/raw with two synthetic datasets."""
+    copy_workflow(tmp_path)
+    write_dataset(tmp_path / "data" / "raw" / "pilot", participants=("p01", "p02"))
+    conditions = [("known_goal", m, "no_misspecification") for m in ("NA", "CASA")]
+    write_dataset(
+        tmp_path / "data" / "raw" / "lab",
+        participants=("h1",),
+        surveys=False,
+        conditions=conditions,
+    )
+    return tmp_path
+
+
+def test_lint_is_clean(repo):
+    result = snakemake(repo, "--lint")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "Congratulations" in result.stdout + result.stderr
+
+
+def test_default_target_covers_every_output_of_every_dataset(repo):
+    result = snakemake(repo, "--dry-run")
+    assert result.returncode == 0, result.stderr
+    text = result.stdout + result.stderr
+    for ds in ("pilot", "lab"):
+        for name in ("trials", "steps", "likert", "stats", "validation"):
+            assert f"data/processed/{ds}/{name}.csv" in text
+        assert f"data/processed/{ds}/stats.md" in text
+        assert f"figures/{ds}/objective.pdf" in text and f"figures/{ds}/objective.png" in text
+    assert "figures/scene.png" in text
+    # Likert figures only where there are surveys.
+    assert "figures/pilot/likert.png" in text and "figures/lab/likert" not in text
+    # Every rule writes a log.
+    assert "log: logs/validate/pilot.log" in text
+
+
+def test_tables_are_built_and_a_new_dataset_is_picked_up(repo):
+    targets = [f"data/processed/{ds}/trials.csv" for ds in ("pilot", "lab")]
+    result = snakemake(repo, *targets)
+    assert result.returncode == 0, result.stderr
+    processed = repo / "data" / "processed"
+    first = {p.name: p.read_bytes() for p in (processed / "pilot").iterdir()}
+    assert set(first) == {"trials.csv", "steps.csv", "likert.csv", "validation.csv"}
+    # Nothing to do on a rerun.
+    again = snakemake(repo, *targets)
+    assert "Nothing to be done" in again.stdout + again.stderr
+    # A folder dropped into data/raw joins the default target with no config edit.
+    write_dataset(repo / "data" / "raw" / "newcomers", participants=("n1",), surveys=False)
+    dry = snakemake(repo, "--dry-run")
+    assert "data/processed/newcomers/trials.csv" in dry.stdout
+    assert "data/processed/pilot/trials.csv" not in dry.stdout.split("Job stats")[0]
+    # Same raw files, same bytes.
+    shutil.rmtree(processed / "pilot")
+    assert snakemake(repo, targets[0]).returncode == 0
+    assert {p.name: p.read_bytes() for p in (processed / "pilot").iterdir()} == first
+    # A deleted trial is noticed too (rerun-triggers "input" in the default profile).
+    for suffix in (".csv", ".json"):
+        (
+            repo / "data" / "raw" / "pilot" / "p02" / f"known_goal_PBA_no_misspecification{suffix}"
+        ).unlink()
+    dry = snakemake(repo, "--dry-run", targets[0])
+    assert "Set of input files has changed" in dry.stdout
+
+
+def _break(repo: Path) -> None:
+    folder = repo / "data" / "raw" / "pilot" / "p01"
+    meta_path = folder / "known_goal_NA_no_misspecification.json"
+    meta_path.write_text(json.dumps({**json.loads(meta_path.read_text()), "task": "nope"}))
+    (folder / "stray.csv").write_text("t,x\n0,1\n")
+
+
+def test_a_bad_file_stops_its_dataset_only_and_every_problem_is_listed(repo):
+    _break(repo)
+    targets = [f"data/processed/{ds}/trials.csv" for ds in ("pilot", "lab")]
+    result = snakemake(repo, *targets)
+    assert result.returncode != 0
+    text = result.stdout + result.stderr
+    assert "p01/known_goal_NA_no_misspecification.json: key 'task': [enum]" in text
+    assert (
+        "p01/stray.json: [pair]" in text and "p01/stray.csv: column 'y': [required-column]" in text
+    )
+    processed = repo / "data" / "processed"
+    # keep-going (profiles/default, read without being named): the other dataset builds.
+    assert f"workflow specific profile {PROFILE}" in text
+    assert (processed / "lab" / "trials.csv").is_file(), text[-3000:]
+    assert not (processed / "pilot" / "trials.csv").exists()
+    assert not (processed / "pilot" / "validation.csv").exists()
+
+    # allow_invalid=true: the bad files are excluded and listed.
+    result = snakemake(repo, *targets, "--config", "allow_invalid=true")
+    assert result.returncode == 0, result.stderr
+    validation = (processed / "pilot" / "validation.csv").read_text()
+    assert "p01/known_goal_NA_no_misspecification.csv,trial,excluded,enum" in validation
+    assert "p01/stray.csv,trial,excluded,pair" in validation
+    trials = (processed / "pilot" / "trials.csv").read_text()
+    assert "p01/known_goal_NA_no_misspecification" not in trials
+    assert "p02/known_goal_NA_no_misspecification" in trials
+
+
+def test_a_badly_named_dataset_folder_is_refused(repo):
+    (repo / "data" / "raw" / "my data").mkdir()
+    result = snakemake(repo, "--dry-run")
+    assert result.returncode != 0
+    text = result.stdout + result.stderr
+    assert "data/raw/my data" in text and "rename it" in text
+
+
+FIGURES = ("objective.pdf", "objective.png", "likert.pdf", "likert.png")
+
+
+def test_default_target_builds_every_table_figure_and_the_report(repo):
+    # The whole default target for real on the datasets in data/raw (the simulated study
+    # and the case study take minutes; CI builds them with config/ci.yaml), on three
+    # participants.
+    for ds in ("lab", "pilot"):
+        shutil.rmtree(repo / "data" / "raw" / ds)
+    write_dataset(repo / "data" / "raw" / "pilot", participants=("p01", "p02", "p03"))
+    result = snakemake(repo, "--cores", "2", "--config", "simulate=false")
+    assert result.returncode == 0, result.stdout[-3000:]
+    processed = repo / "data" / "processed" / "pilot"
+    for name in (
+        "trials.csv",
+        "steps.csv",
+        "likert.csv",
+        "stats.csv",
+        "stats.md",
+        "validation.csv",
+    ):
+        assert (processed / name).stat().st_size > 0, name
+    for name in FIGURES:
+        head = (repo / "figures" / "pilot" / name).read_bytes()[:8]
+        assert head.startswith(b"%PDF" if name.endswith("pdf") else b"\x89PNG"), name
+    assert (repo / "figures" / "scene.png").read_bytes()[:4] == b"\x89PNG"
+    assert "Nothing to be done" in snakemake(repo, "--dry-run", "--config", "simulate=false").stdout
+    report = snakemake(repo, "--report", "report.html", "--config", "simulate=false")
+    assert report.returncode == 0, report.stdout[-3000:]
+    html = (repo / "report.html").read_text(errors="replace")
+    for caption in (
+        "Objective metrics of dataset pilot",
+        "Likert answers (1-7) of dataset pilot",
+        "Statistics of dataset pilot",
+        "The scene of the study",
+    ):
+        assert caption in html
+
+
+def test_a_dataset_missing_conditions_and_surveys_still_gets_stats_and_figures(repo):
+    result = snakemake(repo, "figures/lab/objective.png")
+    assert result.returncode == 0, result.stdout[-3000:]
+    stats = (repo / "data" / "processed" / "lab" / "stats.csv").read_text()
+    assert "missing condition(s): PBA" in stats  # the skipped rows say why
+
+
+def test_config_overrides_reach_the_package_commands(repo):
+    # The package commands read data/interim/config.yaml: what Snakemake sees,
+    # `--config` overrides (merged into nested keys) and schema defaults included.
+    import yaml
+
+    effective = repo / "data" / "interim" / "config.yaml"
+    result = snakemake(repo, "--dry-run", "--config", "simulation={max_duration: 20.0}")
+    assert result.returncode == 0, result.stdout + result.stderr
+    seen = yaml.safe_load(effective.read_text(encoding="utf-8"))
+    assert seen["simulation"]["max_duration"] == 20.0
+    assert seen["simulation"]["participants"] == 11  # the rest of the file is kept
+    config_file = "config/config.yaml"
+    assert (repo / config_file).read_text() == (ROOT / config_file).read_text()  # never edited
+    assert snakemake(repo, "--dry-run").returncode == 0
+    assert yaml.safe_load(effective.read_text())["simulation"]["max_duration"] == 40.0
+    assert effective.stat().st_mode & 0o777 == 0o644  # written by casa_core.io.atomic
+    # An unchanged config is not rewritten, so that it reruns nothing.
+    before = effective.stat().st_mtime_ns
+    assert snakemake(repo, "--dry-run").returncode == 0
+    assert effective.stat().st_mtime_ns == before
