@@ -179,7 +179,7 @@ def target_units(config: Mapping, target: str) -> dict[str, tuple[str, ...]]:
     raise ValueError(f"progress: no target {target!r} (targets: {', '.join(UNIT_WORDS)})")
 
 
-def unit_configs(target: str, units: Mapping[str, int]) -> dict[str, Path]:
+def unit_configs(target: str, units: Mapping[str, object]) -> dict[str, Path]:
     """Each unit's config file, as the workflow writes it (:data:`INTERIM`).
 
     Examples

@@ -14,6 +14,7 @@ the counts.
 from __future__ import annotations
 
 import re
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -215,7 +216,7 @@ def objective_figure(
     """
     rows = prepare_trials(trials)
     tasks = [t for t in style.SHOWN_TASKS if t in set(rows["task"])]
-    columns: list[str | None] = [*tasks] or [None]
+    columns: list[Any] = [*tasks] or [None]  # None: one column of every trial
     with style.context():
         fig = style.new_figure(7.0, 1.6 * (len(METRICS) + 1) + 0.7)
         grid = fig.subplots(len(METRICS) + 1, len(columns), squeeze=False)

@@ -280,9 +280,9 @@ def optimize(
     for iterations in range(1, budget + 1):  # noqa: B007 (the count is reported)
         if value_and_grad is None:
             x = torch.from_numpy(states_u).requires_grad_(True)
-            row_costs = state_cost(x * scale_t).sum(dim=1)
-            (grad,) = torch.autograd.grad(row_costs.sum(), x)
-            row_costs, grad = row_costs.detach().numpy(), grad.numpy()
+            summed = state_cost(x * scale_t).sum(dim=1)
+            (gradient,) = torch.autograd.grad(summed.sum(), x)
+            row_costs, grad = summed.detach().numpy(), gradient.numpy()
         else:  # a numpy cost with its own gradient (no autograd)
             per_state, grad = value_and_grad(states_u * scale)
             row_costs = per_state.sum(axis=1)

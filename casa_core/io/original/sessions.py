@@ -200,8 +200,9 @@ def read_session(path: Path | str) -> Session:
     check.increasing("inf_start_time", steps)
     belief, beta = _inference_arrays(check, steps)
     raw_start = check.arrays.get("start_T")
-    number = raw_start is not None and np.ndim(raw_start) == 0
-    started = float(raw_start) if number and np.asarray(raw_start).dtype.kind in "iuf" else None
+    started = None
+    if raw_start is not None and np.ndim(raw_start) == 0:
+        started = float(raw_start) if np.asarray(raw_start).dtype.kind in "iuf" else None
     if check.problems:
         raise SessionError(check.problems)
     return Session(str(path), time, q, command, steps, belief, beta, started)
