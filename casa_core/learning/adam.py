@@ -1,7 +1,7 @@
 """Adam for the IRL network, written out.
 
 The same update as ``torch.optim.Adam`` on the CPU (its single-tensor form, with
-L2 weight decay added to the gradient), to the bit: ``tests/test_irl.py`` checks
+L2 weight decay added to the gradient), to the bit: ``tests/learning/test_irl.py`` checks
 the weights after several steps against torch's. Written out because constructing
 ``torch.optim.Adam`` imports ``torch._dynamo``, which costs about 1.7 CPU-seconds
 once per process, as much as learning an intent itself.

@@ -11,7 +11,7 @@ torch, everything between them in compiled loops (:mod:`casa_core.learning._kern
 into work arrays kept per row count. Training the network's weights stays in torch.
 
 The values agree with the torch formula to float32 rounding (the matrix products
-may sum in another order): ``tests/test_speed_equivalence.py`` checks costs and
+may sum in another order): ``tests/learning/test_speed_equivalence.py`` checks costs and
 gradients against torch's autograd.
 
 Examples

@@ -166,7 +166,7 @@ class PouringCost:
     The planner evaluates the pouring cost and its gradient some hundred times per plan
     on a few dozen states; torch's per-operation and autograd overhead is most of that
     time. This computes the same formula and its derivative by hand in one compiled
-    (numba) loop over the states, on numpy arrays; ``tests/test_fast_tick.py`` holds
+    (numba) loop over the states, on numpy arrays; ``tests/robot/test_fast_tick.py`` holds
     both to torch's autograd. A snapshot of the intent's parameters at construction.
 
     Examples

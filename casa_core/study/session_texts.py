@@ -2,7 +2,7 @@
 
 The texts name the robots by their neutral labels only
 (:func:`casa_core.study.session.label_of`): no text here may name an assistance method
-(tests/test_session.py checks every text of every step).
+(tests/study/test_session.py checks every text of every step).
 """
 
 from __future__ import annotations
