@@ -196,31 +196,22 @@ def operator_option(wildcards):
     return f"--operator {config['simulation']['operator']}"
 
 
-def drop_orphaned_statistics(datasets):
-    """Remove the statistics of every dataset whose tables are missing, before planning.
+def stats_input(wildcards):
+    """The tables of the statistics; statistics left beside missing tables are removed.
 
     Snakemake keeps an output whose inputs were deleted (a failed processing step
     deletes its tables), so such statistics would describe tables that are gone;
-    removed here, once, they are rebuilt with the tables. A dry run only says so.
+    removed here, they are rebuilt with the tables. A dry run only says so.
     """
-    for ds in datasets:
-        folder = PROCESSED / ds
-        if all((folder / f"{name}.csv").exists() for name in ("trials", "likert")):
-            continue
+    folder = PROCESSED / wildcards.ds
+    tables = {name: folder / f"{name}.csv" for name in ("trials", "likert")}
+    if not all(path.exists() for path in tables.values()):
         for stale in (folder / "stats.csv", folder / "stats.md"):
             if stale.exists() and workflow.dryrun:
                 print(f"{stale}: its tables are missing; a run rebuilds it", file=sys.stderr)
             elif stale.exists():
                 stale.unlink()
-
-
-drop_orphaned_statistics(DATASETS)
-
-
-def stats_input(wildcards):
-    """The tables of the statistics."""
-    folder = PROCESSED / wildcards.ds
-    return {name: folder / f"{name}.csv" for name in ("trials", "likert")}
+    return tables
 
 
 # The robustness target's modelling variants (workflow/rules/robustness.smk;
