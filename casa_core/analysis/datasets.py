@@ -297,20 +297,6 @@ def write_tables(tables: DatasetTables, out_dir: Path | str) -> list[Path]:
     return paths
 
 
-def process_dataset(
-    raw_dir: Path | str,
-    out_dir: Path | str,
-    scene: Scene,
-    *,
-    dataset: str | None = None,
-    allow_invalid: bool = False,
-) -> DatasetTables:
-    """Build a dataset's tables (:func:`build_tables`) and write them to ``out_dir``."""
-    tables = build_tables(raw_dir, scene, dataset=dataset, allow_invalid=allow_invalid)
-    write_tables(tables, out_dir)
-    return tables
-
-
 def write_validation(
     paths: list[Path | str], out_csv: Path | str, *, allow_invalid: bool = False
 ) -> list[FileCheck]:

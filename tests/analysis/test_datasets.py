@@ -39,8 +39,15 @@ def raw(tmp_path_factory):
     return folder
 
 
+def process(raw, out, scene, **options) -> datasets.DatasetTables:
+    """What ``casa process`` does: a dataset's tables built and written."""
+    tables = datasets.build_tables(raw, scene, **options)
+    datasets.write_tables(tables, out)
+    return tables
+
+
 def test_tables_follow_the_column_contract(raw, tmp_path):
-    tables = datasets.process_dataset(raw, tmp_path, SCENE)
+    tables = process(raw, tmp_path, SCENE)
     trials = pd.read_csv(tmp_path / "trials.csv")
     steps = pd.read_csv(tmp_path / "steps.csv")
     likert = pd.read_csv(tmp_path / "likert.csv")
@@ -85,7 +92,7 @@ def test_steps_are_long_one_row_per_tick_and_intent(raw):
 
 def test_same_raw_files_give_the_same_bytes(raw, tmp_path):
     for out in ("a", "b"):
-        datasets.process_dataset(raw, tmp_path / out, SCENE)
+        process(raw, tmp_path / out, SCENE)
         datasets.write_validation([raw], tmp_path / out / "validation.csv")
     for name in ("trials", "steps", "likert", "validation"):
         a = (tmp_path / "a" / f"{name}.csv").read_bytes()
@@ -111,7 +118,7 @@ def test_bad_files_stop_the_dataset_listing_every_problem(tmp_path):
     write_dataset(tmp_path / "ds", participants=("p01", "p02"))
     _break(tmp_path / "ds")
     with pytest.raises(datasets.DatasetInvalid) as raised:
-        datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE)
+        process(tmp_path / "ds", tmp_path / "out", SCENE)
     rules = sorted(p.rule for p in raised.value.problems)
     assert rules == ["enum", "enum", "keys", "likert-score"]
     assert "3 file(s)" in str(raised.value) and "allow_invalid" in str(raised.value)
@@ -122,7 +129,7 @@ def test_allow_invalid_excludes_bad_files_and_lists_them(tmp_path):
     write_dataset(tmp_path / "ds", participants=("p01", "p02"))
     _break(tmp_path / "ds")
     before = _digests(tmp_path / "ds")
-    tables = datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE, allow_invalid=True)
+    tables = process(tmp_path / "ds", tmp_path / "out", SCENE, allow_invalid=True)
     assert len(tables.trials) == 2 * 11 - 2
     # Only the bad answer is left out: 2 participants x 11 conditions x 3 questions remain.
     assert len(tables.likert) == 2 * 11 * 3
@@ -149,7 +156,7 @@ def test_a_dataset_without_na_or_surveys_still_builds(tmp_path):
 
 
 def test_trials_end_with_timed_out_and_success(raw, tmp_path):
-    datasets.process_dataset(raw, tmp_path, SCENE)
+    process(raw, tmp_path, SCENE)
     header = (tmp_path / "trials.csv").read_text().splitlines()[0].split(",")
     assert header[-2:] == ["timed_out", "success"]
     trials = read_table(tmp_path / "trials.csv")
@@ -174,7 +181,7 @@ def test_timed_out_comes_from_the_logged_limit(tmp_path):
         path = stem.with_suffix(".json")
         meta = json.loads(path.read_text())
         path.write_text(json.dumps({**meta, "max_duration": frame["t"].iloc[-1] + extra}))
-    datasets.process_dataset(tmp_path / "ds", tmp_path / "out", SCENE)
+    process(tmp_path / "ds", tmp_path / "out", SCENE)
     trials = read_table(tmp_path / "out" / "trials.csv").set_index("method")
     assert trials.loc["NA", "timed_out"] is True and trials.loc["PBA", "timed_out"] is False
     assert pd.isna(trials.loc["CASA", "timed_out"])
