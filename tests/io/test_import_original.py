@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 
 import numpy as np
 import pandas as pd
@@ -367,3 +368,40 @@ def test_the_workflow_processes_an_imported_dataset_with_its_scene(sessions, tmp
     for name in ("objective.png", "objective.pdf"):
         assert (repo / "figures/original" / name).stat().st_size > 0
     assert (repo / "data/processed/original/stats.md").exists()
+
+
+class RunsCode:
+    """Unpickled, it runs a shell command: what a crafted session file could hold."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return os.system, (f"touch {self.marker}",)
+
+
+def crafted(marker):
+    return np.array([RunsCode(marker)], dtype=object)
+
+
+def test_an_object_array_is_never_unpickled(sessions, tmp_path):
+    # The original stores its goals' planned trajectories as object arrays (pickles); the
+    # import uses none of them, so a crafted one is left unread and the session imports.
+    marker = tmp_path / "ran"
+    path = write_session(sessions, "task1c_data.npz", goal_traj_by_idx=crafted(marker))
+    assert run_import(sessions, tmp_path / "out") == 0
+    assert not marker.exists()
+    assert (tmp_path / "out" / "P03" / "task1c.json").is_file()
+    # The file is a real threat: loading it with pickles allowed runs its command.
+    with np.load(path, allow_pickle=True) as archive:
+        archive["goal_traj_by_idx"]
+    assert marker.exists()
+
+
+def test_a_needed_key_held_as_a_pickle_is_refused_unread(sessions, tmp_path, capsys):
+    marker = tmp_path / "ran"
+    path = write_session(sessions, "task1b_data.npz", curr_pos=crafted(marker))
+    assert run_import(sessions, tmp_path / "out") == 2
+    err = capsys.readouterr().err
+    assert f"{path}: key 'curr_pos': [pickle]" in err and "Traceback" not in err
+    assert not marker.exists()

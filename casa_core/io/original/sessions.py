@@ -102,14 +102,34 @@ def reference_q(name: str) -> np.ndarray:
     return np.radians(np.asarray(REFERENCE_ANGLES[name], dtype=float))
 
 
+#: Stands for an object array of a session file: a pickle, never loaded.
+PICKLED = object()
+
+
 def _load(path: Path) -> dict:
-    """The arrays of an ``.npz``; SessionError (rule ``npz``) when it cannot be read."""
+    """The arrays of an ``.npz``, with no pickle loaded; SessionError (rule ``npz``) when
+    it cannot be read.
+
+    An object array is stored as a pickle, and loading a pickle can run any code the file
+    holds, so each one is left unread (:data:`PICKLED`): the original keeps its goals'
+    planned trajectories so, which the import does not use.
+    """
     try:
-        with np.load(path, allow_pickle=True, encoding="latin1") as archive:
-            return {key: archive[key] for key in archive.files}
+        with np.load(path, allow_pickle=False) as archive:
+            return {key: _array(archive, key) for key in archive.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as error:
         message = f"not a readable NumPy .npz archive (a zip of arrays): {error}"
         raise SessionError([Problem(str(path), "", "npz", message)]) from None
+
+
+def _array(archive, key: str):
+    """``archive[key]``, or :data:`PICKLED` for an object array (never unpickled)."""
+    try:
+        return archive[key]
+    except ValueError as error:
+        if "allow_pickle" not in str(error):
+            raise
+        return PICKLED
 
 
 class _Checker:
@@ -127,6 +147,10 @@ class _Checker:
         (rows, any); else None. ``finite=False``: NaN and inf allowed (the original's 0/0)."""
         if key not in self.arrays:
             self.fail(key, "required-key", "missing")
+            return None
+        if self.arrays[key] is PICKLED:
+            message = "is an object array (a pickle), which is never loaded: it could run code"
+            self.fail(key, "pickle", message)
             return None
         try:
             value = np.asarray(self.arrays[key], dtype=float)
@@ -170,7 +194,8 @@ def read_session(path: Path | str) -> Session:
     ------
     SessionError
         Listing every problem, each naming the file, the key and the rule: ``npz`` (not
-        a readable archive), ``required-key``, ``numbers``, ``shape``, ``finite-number``,
+        a readable archive), ``required-key``, ``pickle`` (an object array, never loaded),
+        ``numbers``, ``shape``, ``finite-number``,
         ``rows`` (arrays of one length disagree), ``range``, ``increasing`` (times).
 
     Examples
