@@ -28,8 +28,9 @@ from casa_core.scene import load_scene
 #: Sample times: about 18 Hz, irregular (steps of 0.05 and 0.06 s), 3.0 s in all.
 TIMES = np.cumsum(np.r_[0.0, np.tile([0.05, 0.06], 27), 0.03])
 DURATION = TIMES[-1]  # 3.0 s: ticks 0, 0.05, ..., 3.0
-#: Inference steps and what they logged (two goals).
-STEPS = np.array([0.5, 1.0, 1.5, 2.0, 2.5])
+#: The times of the inference rows and what they logged (two goals): as in the original's
+#: files, row 0 is the step at t = 0, which inf_start_time does not time (one row fewer).
+STEPS = np.array([0.0, 1.0, 1.5, 2.0, 2.5])
 BELIEFS = np.array([[0.5, 0.5], [0.6, 0.4], [np.nan, np.nan], [0.7, 0.3], [0.2, 0.8]])
 BETAS = np.array([[0.5, 0.5], [2.0, 1.0], [4.0, -1.0], [-0.5, 3.0], [1.0, 4.0]])
 #: CASA's alpha after each step, by hand: clip(1 / beta of the most likely goal, 0, 1), the
@@ -68,7 +69,7 @@ def session_arrays(n_goals=2, beta=True):
         "ctl_cmd": np.zeros_like(q),
         "cmd": commands,
         "traj_hist": np.zeros((31, 7)),
-        "inf_start_time": STEPS,
+        "inf_start_time": STEPS[1:],
         "sub_hist": np.ones((5, n_goals)),
         "belief_hist": beliefs,
         "beta_hist": betas if beta else np.zeros(0),
@@ -405,3 +406,91 @@ def test_a_needed_key_held_as_a_pickle_is_refused_unread(sessions, tmp_path, cap
     err = capsys.readouterr().err
     assert f"{path}: key 'curr_pos': [pickle]" in err and "Traceback" not in err
     assert not marker.exists()
+
+
+#: The eleven sessions the authors recorded, by their layout: control-loop samples n,
+#: timed inference steps m (the histories have m + 1 rows), goals, whether betas were
+#: logged, and the optional cost arrays (shapes as the files hold them). Their keys,
+#: shapes and dtypes are those of the files; the values here are synthetic.
+RECORDED = {
+    "task0c_data.npz": (128, 29, 2, True, {}),
+    "task0ex_data.npz": (125, 29, 2, True, {}),
+    "task1a_data.npz": (289, 29, 2, False, {}),
+    "task1b_data.npz": (288, 29, 2, False, {}),
+    "task1c_data.npz": (289, 29, 2, True, {}),
+    "task2a_data.npz": (287, 29, 2, False, {}),
+    "task2b_data.npz": (124, 27, 2, False, {}),
+    "task2c_data.npz": (
+        145,
+        29,
+        2,
+        True,
+        {"goal_costs": (29, 2), "curr_cost": (30, 2), "optimal_costs": (2,)},
+    ),
+    "task4a_data.npz": (125, 29, 3, True, {}),
+    "task4c_learned_data.npz": (126, 9, 3, True, {}),
+    "task4ex_data.npz": (132, 29, 3, True, {}),
+}
+
+
+def object_array(value):
+    """A 0-d object array, as Python 2 pickled the original's lists of plans."""
+    array = np.empty((), dtype=object)
+    array[()] = value
+    return array
+
+
+def recorded_layout(n, m, goals, with_beta, costs, seed):
+    rng = np.random.default_rng(seed)
+    time = np.sort(rng.uniform(0.0, 15.0, n))
+    time[0] = 0.0
+    q = joint_angles(time)
+    command = np.array([command_of(qi, [0.0, 0.0, 0.05]) for qi in q])
+    # Late steps keep their times: every 0.5 s, but one step of 2 s after the fifth.
+    timed = 0.5 * np.arange(1, m + 1) + np.where(np.arange(1, m + 1) > 5, 1.5, 0.0)
+    belief = rng.dirichlet(np.ones(goals), m + 1)
+    arrays = {
+        "cmdpos_time": time,
+        "curr_pos": q,
+        "joy_cmd": command,
+        "ctl_cmd": np.zeros((n, 7)),
+        "cmd": command,
+        "num_key_presses": np.arange(n, dtype=np.int64),
+        "traj_hist": np.zeros((31, 7)),
+        "inf_start_time": timed,
+        "sub_hist": rng.uniform(0, 5, (m + 1, goals)),
+        "belief_hist": belief,
+        "beta_hist": rng.uniform(0.5, 4, (m + 1, goals)) if with_beta else np.zeros(0),
+        "goal_costs": np.zeros(0),
+        "curr_cost": np.zeros(0),
+        "start_T": np.array(1.6e9),
+        "goal_traj_by_idx": object_array([[0.0] * 7] * 3),
+        "goal_traj_plan_by_idx": object_array([[0.0] * 7] * 3),
+    }
+    arrays |= {key: rng.uniform(0, 1, shape) for key, shape in costs.items()}
+    return arrays
+
+
+def test_every_recorded_layout_imports_with_its_steps_real_times(tmp_path):
+    folder = tmp_path / "sessions" / "P01"
+    folder.mkdir(parents=True)
+    for seed, (name, layout) in enumerate(RECORDED.items()):
+        np.savez(folder / name, **recorded_layout(*layout, seed=seed))
+    out = tmp_path / "out"
+    assert run_import(folder, out) == 0
+    stems = {p.stem for p in (out / "P01").glob("*.json")}
+    assert stems == {n.removesuffix("_data.npz") for n in RECORDED if "ex_" not in n}
+    # Row 0 holds from t = 0; row k from inf_start_time[k - 1], late steps at their time.
+    arrays = recorded_layout(*RECORDED["task2c_data.npz"], seed=7)
+    _, frame = read_trial(out / "P01" / "task2c")
+    times = np.r_[0.0, arrays["inf_start_time"]]
+    belief = arrays["belief_hist"] / arrays["belief_hist"].sum(axis=1, keepdims=True)
+    step = [held_at(times, range(len(times)), t) for t in frame["t"]]
+    assert np.allclose(frame["belief:green"], belief[step, 0])
+
+
+def test_histories_without_the_row_at_t0_are_refused_naming_the_rule(sessions, capsys, tmp_path):
+    path = write_session(sessions, "task1c_data.npz", inf_start_time=STEPS)
+    assert run_import(sessions, tmp_path / "out") == 2
+    err = capsys.readouterr().err
+    assert f"{path}: key 'belief_hist': [rows] has 5 rows, expected 6" in err

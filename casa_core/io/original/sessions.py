@@ -77,8 +77,10 @@ class SessionError(ValueError):
 class Session:
     """The arrays of one session file that the conversion reads, checked.
 
-    ``time`` (n,), ``q`` and ``command`` (n, 7); ``steps`` (m,) and ``belief`` (m, g);
-    ``beta`` (m, g) or None when the method logged none; ``started`` the wall clock or None.
+    ``time`` (n,), ``q`` and ``command`` (n, 7); ``steps`` (m + 1,) the time of each
+    inference row: 0 (the step at the start, not timed in the file), then
+    ``inf_start_time``; ``belief`` (m + 1, g); ``beta`` (m + 1, g) or None when the
+    method logged none; ``started`` the wall clock or None.
     """
 
     file: str
@@ -221,8 +223,10 @@ def read_session(path: Path | str) -> Session:
             check.fail("cmdpos_time", "non-empty", "no samples")
         check.rows("curr_pos", q, len(time), "cmdpos_time")
         check.rows("joy_cmd", command, len(time), "cmdpos_time")
-    steps = check.array("inf_start_time", None)
-    check.increasing("inf_start_time", steps)
+    timed = check.array("inf_start_time", None)
+    check.increasing("inf_start_time", timed)
+    # Row 0 of the histories is the step at t = 0; row k the one started at timed[k - 1].
+    steps = None if timed is None else np.r_[0.0, timed]
     belief, beta = _inference_arrays(check, steps)
     raw_start = check.arrays.get("start_T")
     started = None
@@ -234,7 +238,8 @@ def read_session(path: Path | str) -> Session:
 
 
 def _inference_arrays(check: _Checker, steps):
-    """``belief_hist`` (m, g) and ``beta_hist`` (m, g) or None; (0,) arrays when m = 0."""
+    """``belief_hist`` (m + 1, g) and ``beta_hist`` (m + 1, g) or None, ``steps`` the m + 1
+    times of their rows."""
     m = None if steps is None else len(steps)
     arrays: dict[str, np.ndarray | None] = {}
     for key in ("belief_hist", "beta_hist"):
@@ -245,12 +250,16 @@ def _inference_arrays(check: _Checker, steps):
         if raw is None or np.shape(raw) == (0,):
             # No betas: the method used none; no beliefs only without inference steps.
             if key == "belief_hist" and m:
-                check.fail(key, "shape", f"is empty but inf_start_time has {m} steps")
+                check.fail(key, "shape", f"is empty but the session has {m} inference steps")
             arrays[key] = None
             continue
         value = check.array(key, 0, finite=False)
-        if value is not None and m is not None:
-            check.rows(key, value, m, "inf_start_time")
+        if value is not None and m is not None and len(value) != m:
+            message = (
+                f"has {len(value)} rows, expected {m}: one per entry of inf_start_time "
+                f"({m - 1}) and row 0, the step at t = 0"
+            )
+            check.fail(key, "rows", message)
         arrays[key] = value
     belief, beta = arrays.get("belief_hist"), arrays.get("beta_hist")
     if belief is None:
