@@ -36,7 +36,6 @@ original implementation's sessions"); in short:
 
 from __future__ import annotations
 
-import zipfile
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -48,6 +47,7 @@ import pandas as pd
 from casa_core.defaults import PBA_DISTANCE, ROT_SPEED, SPEED
 from casa_core.io import JOINTS, Problem
 from casa_core.io.contract import TICK
+from casa_core.io.original._checker import Checker, SessionError, load_arrays
 from casa_core.robot import kinematics as kin
 from casa_core.scene import KNOWN_GOALS
 from casa_core.vocabulary import KEYS
@@ -63,14 +63,6 @@ REFERENCE_ANGLES = {
 KEY_FRACTION = 0.5
 #: The arrays a session must have (the others are not read).
 REQUIRED_KEYS = ("cmdpos_time", "curr_pos", "joy_cmd", "inf_start_time", "belief_hist")
-
-
-class SessionError(ValueError):
-    """Session files that cannot be imported; ``problems`` lists each, naming the file."""
-
-    def __init__(self, problems: list[Problem]):
-        self.problems = problems
-        super().__init__("\n".join(map(str, problems)))
 
 
 @dataclass(frozen=True)
@@ -104,91 +96,6 @@ def reference_q(name: str) -> np.ndarray:
     return np.radians(np.asarray(REFERENCE_ANGLES[name], dtype=float))
 
 
-#: Stands for an object array of a session file: a pickle, never loaded.
-PICKLED = object()
-
-
-def _load(path: Path) -> dict:
-    """The arrays of an ``.npz``, with no pickle loaded; SessionError (rule ``npz``) when
-    it cannot be read.
-
-    An object array is stored as a pickle, and loading a pickle can run any code the file
-    holds, so each one is left unread (:data:`PICKLED`): the original keeps its goals'
-    planned trajectories so, which the import does not use.
-    """
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            return {key: _array(archive, key) for key in archive.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as error:
-        message = f"not a readable NumPy .npz archive (a zip of arrays): {error}"
-        raise SessionError([Problem(str(path), "", "npz", message)]) from None
-
-
-def _array(archive, key: str):
-    """``archive[key]``, or :data:`PICKLED` for an object array (never unpickled)."""
-    try:
-        return archive[key]
-    except ValueError as error:
-        if "allow_pickle" not in str(error):
-            raise
-        return PICKLED
-
-
-class _Checker:
-    """Checks of one session's arrays; every problem names the file, the key and the rule."""
-
-    def __init__(self, file: str, arrays: dict):
-        self.file, self.arrays = file, arrays
-        self.problems: list[Problem] = []
-
-    def fail(self, key: str, rule: str, message: str) -> None:
-        self.problems.append(Problem(self.file, f"key {key!r}", rule, message))
-
-    def array(self, key: str, columns: int | None, *, finite: bool = True):
-        """``key`` as a float array of shape (rows,), (rows, columns) or, for columns 0,
-        (rows, any); else None. ``finite=False``: NaN and inf allowed (the original's 0/0)."""
-        if key not in self.arrays:
-            self.fail(key, "required-key", "missing")
-            return None
-        if self.arrays[key] is PICKLED:
-            message = "is an object array (a pickle), which is never loaded: it could run code"
-            self.fail(key, "pickle", message)
-            return None
-        try:
-            value = np.asarray(self.arrays[key], dtype=float)
-        except (TypeError, ValueError):
-            self.fail(key, "numbers", f"must hold numbers, got dtype {self.arrays[key].dtype}")
-            return None
-        wanted = {None: "(n,)", 0: "(m, goals)"}.get(columns, f"(n, {columns})")
-        if value.ndim != (1 if columns is None else 2) or (columns and value.shape[1] != columns):
-            self.fail(key, "shape", f"must have shape {wanted}, got {value.shape}")
-            return None
-        if finite and not np.all(np.isfinite(value)):
-            rows = np.flatnonzero(~np.isfinite(value).reshape(len(value), -1).all(axis=1))
-            self.fail(key, "finite-number", f"row {rows[0]} is not finite")
-            return None
-        return value
-
-    def rows(self, key: str, value, expected: int, of: str) -> None:
-        if value is not None and len(value) != expected:
-            self.fail(key, "rows", f"has {len(value)} rows, {of} has {expected}")
-
-    def increasing(self, key: str, value) -> None:
-        if value is None:
-            return
-        if len(value) and value[0] < 0:
-            self.fail(key, "range", f"starts at {value[0]!r} s: times count from the start, >= 0")
-        steps = np.diff(value)
-        if np.any(steps <= 0):
-            row = int(np.flatnonzero(steps <= 0)[0]) + 1
-            self.fail(
-                key,
-                "increasing",
-                f"must strictly increase; row {row} is not after row "
-                f"{row - 1} ({value[row]!r} <= {value[row - 1]!r})",
-            )
-
-
 def read_session(path: Path | str) -> Session:
     """Load and check one session file of the original implementation.
 
@@ -213,7 +120,7 @@ def read_session(path: Path | str) -> Session:
 ("key 'belief_hist'", 'required-key')]
     """
     path = Path(path)
-    check = _Checker(str(path), _load(path))
+    check = Checker(str(path), load_arrays(path))
     time = check.array("cmdpos_time", None)
     q = check.array("curr_pos", kin.N_JOINTS)
     command = check.array("joy_cmd", kin.N_JOINTS)
@@ -232,12 +139,12 @@ def read_session(path: Path | str) -> Session:
     started = None
     if raw_start is not None and np.ndim(raw_start) == 0:
         started = float(raw_start) if np.asarray(raw_start).dtype.kind in "iuf" else None
-    if check.problems:
+    if check.problems or steps is None:  # no steps: inf_start_time's problem is listed
         raise SessionError(check.problems)
     return Session(str(path), time, q, command, steps, belief, beta, started)
 
 
-def _inference_arrays(check: _Checker, steps):
+def _inference_arrays(check: Checker, steps):
     """``belief_hist`` (m + 1, g) and ``beta_hist`` (m + 1, g) or None, ``steps`` the m + 1
     times of their rows."""
     m = None if steps is None else len(steps)
