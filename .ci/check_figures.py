@@ -10,7 +10,6 @@ import numpy as np
 from matplotlib.image import imread
 
 from casa_core import figures
-from casa_core.analysis import datasets
 from casa_core.figures.replay import replay_figure
 from casa_core.io import read_table
 
@@ -74,7 +73,7 @@ for stem in ["arbitration", "case_study", "simulated/objective", "simulated/like
         check_file(FIGS / f"{stem}.{ext}")
 check_file(FIGS / "scene.png")
 
-read = datasets.read_table
+read = read_table
 simulated = PROCESSED / "simulated"
 check_panels(
     "objective",
