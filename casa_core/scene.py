@@ -19,7 +19,7 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -78,29 +78,41 @@ class Scene:
         Goal positions by name (read-only); at least ``green``, ``purple`` and ``red``.
     pouring : Pouring
     teleop : Teleop
+    link7_goals : Mapping[str, tuple of 3 floats]
+        Optional: the link-7 origins of goals (the original implementation's end
+        effector), for inference that measures at link 7; empty when not given.
     """
 
     start: Start
     goals: MappingProxyType
     pouring: Pouring
     teleop: Teleop
+    link7_goals: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
     @property
     def start_state(self) -> np.ndarray:
         """The state ``[x, y, z, rot]`` in which every trial starts."""
         return np.array([*self.start.position, self.start.rot], dtype=float)
 
-    def goal(self, name: str) -> np.ndarray:
-        """The position of goal ``name``; ValueError naming the goals there are."""
-        if name not in self.goals:
-            raise SceneError(f"scene: goals has no {name!r}; it has {', '.join(self.goals)}")
-        return np.array(self.goals[name], dtype=float)
+    def goal(self, name: str, point: str = "tool") -> np.ndarray:
+        """The position of goal ``name`` at ``point`` (``"tool"`` or ``"link7"``).
+
+        Raises
+        ------
+        SceneError
+            Naming the goals the scene has at that point.
+        """
+        goals = self.goals if point == "tool" else self.link7_goals
+        if name not in goals:
+            key = "goals" if point == "tool" else "link7"
+            raise SceneError(f"scene: {key} has no {name!r}; it has {', '.join(goals) or 'none'}")
+        return np.array(goals[name], dtype=float)
 
     @classmethod
     def from_dict(cls, data: Any, source: str = "scene") -> Scene:
         """Validate a parsed scene file; ``source`` names it in errors."""
         reader = _Reader(source)
-        top = reader.mapping(data, "", ("start", "goals", "pouring", "teleop"))
+        top = reader.mapping(data, "", ("start", "goals", "pouring", "teleop"), ("link7",))
         start = reader.mapping(top["start"], "start", ("position", "rot"))
         goals = reader.mapping(top["goals"], "goals", None)
         missing = [name for name in REQUIRED_GOALS if name not in goals]
@@ -110,6 +122,10 @@ class Scene:
             )
         pouring = reader.mapping(top["pouring"], "pouring", ("position", "bowl", "tilt"))
         teleop = reader.mapping(top["teleop"], "teleop", ("speed", "rot_speed", "dt"))
+        link7 = reader.mapping(top.get("link7", {}), "link7", None)
+        for name in link7:
+            if name not in goals:
+                reader.fail(f"link7.{name}", f"not a goal of the scene ({', '.join(goals)})")
         return cls(
             start=Start(reader.vector(start, "start.position"), reader.number(start, "start.rot")),
             goals=MappingProxyType(
@@ -124,6 +140,9 @@ class Scene:
                 reader.number(teleop, "teleop.speed", positive=True),
                 reader.number(teleop, "teleop.rot_speed", positive=True),
                 reader.number(teleop, "teleop.dt", positive=True),
+            ),
+            link7_goals=MappingProxyType(
+                {str(name): reader.vector(link7, f"link7.{name}") for name in link7}
             ),
         )
 
@@ -159,7 +178,9 @@ class _Reader:
         where = f"{self.source}: {key}" if key else self.source
         raise SceneError(f"{where}: {rule}")
 
-    def mapping(self, node, key: str, required: tuple[str, ...] | None) -> dict:
+    def mapping(
+        self, node, key: str, required: tuple[str, ...] | None, optional: tuple[str, ...] = ()
+    ) -> dict:
         if not isinstance(node, dict):
             self.fail(key, f"must be a mapping, got {node!r}")
         if required is not None:
@@ -167,9 +188,10 @@ class _Reader:
             for name in required:
                 if name not in node:
                     self.fail(f"{prefix}{name}", "missing")
+            known = (*required, *optional)
             for name in node:
-                if name not in required:
-                    self.fail(f"{prefix}{name}", f"unknown key; expected {', '.join(required)}")
+                if name not in known:
+                    self.fail(f"{prefix}{name}", f"unknown key; expected {', '.join(known)}")
         return node
 
     def number(self, node: dict, key: str, *, positive: bool = False) -> float:

@@ -99,8 +99,17 @@ LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
 #: The inference presets (casa_core.assist.presets): this project's, the original
 #: implementation's, the paper's as written.
 PRESET_NAMES = ("casa", "original", "paper")
+#: What the original implementation computed, its defects included: a replay of imported
+#: sessions, to check them against their logs (casa_core.analysis.original_numerics); not a
+#: preset of the assistant and not for analysis.
+DEFECTS_PRESET = "original_defects"
+#: The presets a replay can redo: the assistant's and :data:`DEFECTS_PRESET`.
+REPLAY_PRESETS = (*PRESET_NAMES, DEFECTS_PRESET)
 #: What the trajectory of inference is: the user's commanded motion or the arm's executed one.
 EVIDENCE = ("commanded", "executed")
+#: Where inference measures the arm: the tool point (this project's end effector) or the
+#: origin of link 7, 0.16 m before it (the original implementation's end effector).
+POINTS = ("tool", "link7")
 
 
 def condition_of(method: str, phase: str) -> str | None:

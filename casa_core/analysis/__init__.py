@@ -6,6 +6,10 @@ The modules, each with one job:
 - :mod:`~casa_core.analysis.metrics`: The user study's objective metrics (paper, Sec. V-B),
   per trial.
 - :mod:`~casa_core.analysis.replay`: Replay: offline inference over a recorded casa-trial/1 log.
+- :mod:`~casa_core.analysis.replay_settings`: The settings a replay uses: preset, evidence,
+  arbitration and the point it measures.
+- :mod:`~casa_core.analysis.original_numerics`: What the original implementation computed at
+  an inference step, its defects included.
 """
 
 from casa_core.analysis.datasets import (
@@ -42,8 +46,8 @@ from casa_core.analysis.replay import (
     replay_differences,
     replay_trial,
     resolve_intents,
-    trial_settings,
 )
+from casa_core.analysis.replay_settings import trial_point, trial_settings
 
 __all__ = [
     "COLUMNS",
@@ -72,6 +76,7 @@ __all__ = [
     "timed_out",
     "trajectory_error",
     "trial_metrics",
+    "trial_point",
     "trial_settings",
     "validation_table",
     "write_tables",

@@ -56,6 +56,8 @@ TRIAL_COLUMNS = (
     # its log does not say them).
     "preset",
     "evidence",
+    # The trial's flags (metadata "flags", space-separated; io.contract.TRIAL_FLAGS).
+    "flags",
     # Whether the trial ran to its time limit (empty when its log does not say the
     # limit) and whether it ended where the task intends (casa_core.analysis.metrics).
     "timed_out",
@@ -219,6 +221,7 @@ def _trials_and_steps(
                 ),
                 "trial": trial,
                 **_inference(meta),
+                "flags": " ".join(meta.get("flags", ())),
             }
         )
         step_parts.append(_steps(frame, condition, dataset, trial))

@@ -40,65 +40,24 @@ import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from casa_core.assist.assistant import ARBITRATIONS, Assistant
+from casa_core.analysis.original_numerics import original_rows
+from casa_core.analysis.replay_settings import ReplayError, trial_point, trial_settings
+from casa_core.assist.assistant import Assistant
 from casa_core.assist.intents import GoalIntent, Intent
-from casa_core.assist.presets import DEFAULT_PRESET, Preset
-from casa_core.assist.presets import preset as named_preset
-from casa_core.defaults import DT, EPSILON
-from casa_core.io.contract import INTENT_PREFIXES, INTENT_SUFFIX
+from casa_core.assist.presets import DEFECTS, Preset
+from casa_core.defaults import DT, EPSILON, HORIZON
+from casa_core.io.contract import INTENT_PREFIXES, INTENT_SUFFIX, JOINTS
 from casa_core.robot.keys import keys_to_action, parse_keys
-from casa_core.scene import KNOWN_GOALS, Scene
-from casa_core.vocabulary import METHOD_ARBITRATION
+from casa_core.robot.kinematics import link7_position
+from casa_core.scene import KNOWN_GOALS, Scene, SceneError
+from casa_core.vocabulary import DEFECTS_PRESET, POINTS
 
 #: The columns of a replay table, in order.
 COLUMNS = ("t", "intent", "suboptimality", "beta", "belief", "theta_star", "alpha", "misspecified")
-
-
-class ReplayError(ValueError):
-    """A trial that cannot be replayed as asked; the message names the trial and the reason."""
-
-
-def trial_settings(
-    meta: dict,
-    *,
-    preset: str | None = None,
-    evidence: str | None = None,
-    arbitration: str | None = None,
-) -> tuple[Preset, str]:
-    """The preset (evidence applied) and arbitration a replay of the trial uses.
-
-    Each is the trial's own unless given: the preset and evidence of
-    ``meta["inference"]`` (absent: :data:`~casa_core.assist.presets.DEFAULT_PRESET` and its
-    evidence), the arbitration of ``meta["method"]`` (:data:`METHOD_ARBITRATION`).
-
-    Examples
-    --------
-    >>> meta = {"method": "PBA", "inference": {"preset": "original", "evidence": "executed"}}
-    >>> chosen, arbitration = trial_settings(meta)
-    >>> chosen.name, chosen.evidence, arbitration
-    ('original', 'executed', 'distance')
-    >>> trial_settings(meta, preset="casa", arbitration="confidence")[0].evidence
-    'commanded'
-    """
-    recorded: Any = meta.get("inference") if isinstance(meta.get("inference"), dict) else {}
-    if preset is None:
-        preset = recorded.get("preset", DEFAULT_PRESET)
-        # The trial's evidence goes with its own preset; another preset brings its own.
-        evidence = recorded.get("evidence") if evidence is None else evidence
-    chosen = named_preset(preset, evidence=evidence)
-    if arbitration is None:
-        method = meta.get("method")
-        if method not in METHOD_ARBITRATION:
-            raise ReplayError(f"method {method!r} has no arbitration; give one")
-        arbitration = METHOD_ARBITRATION[method]
-    if arbitration not in ARBITRATIONS:
-        raise ReplayError(f"arbitration must be one of {', '.join(ARBITRATIONS)}: {arbitration!r}")
-    return chosen, arbitration
 
 
 def _participant_key(name: str) -> str:
@@ -141,11 +100,17 @@ def library_files(library: Path | str | None, participant: str | None = None) ->
 
 
 def resolve_intents(
-    names: Sequence[str], scene: Scene, chosen: Preset, learned: Sequence = ()
+    names: Sequence[str],
+    scene: Scene,
+    chosen: Preset,
+    learned: Sequence = (),
+    *,
+    point: str = POINTS[0],
 ) -> list[Intent]:
     """The intents called ``names``: goals of the scene, else learned intents by name.
 
-    A goal's cost is the preset's. ``learned`` holds casa-intent files (the file of
+    A goal's cost is the preset's, its position the scene's at ``point`` (a scene that
+    does not give it there is a ReplayError). ``learned`` holds casa-intent files (the file of
     intent NAME is ``NAME.intent.json``, read only when NAME is needed, a fresh intent
     each time) or intents already built.
 
@@ -157,10 +122,11 @@ def resolve_intents(
     Examples
     --------
     >>> from casa_core.scene import load_scene
-    >>> [i.name for i in resolve_intents(["purple", "green"], load_scene(), named_preset())]
+    >>> from casa_core.assist.presets import preset
+    >>> [i.name for i in resolve_intents(["purple", "green"], load_scene(), preset())]
     ['purple', 'green']
     >>> try:
-    ...     resolve_intents(["learned_red"], load_scene(), named_preset())
+    ...     resolve_intents(["learned_red"], load_scene(), preset())
     ... except ReplayError as error:
     ...     print(error)  # doctest: +NORMALIZE_WHITESPACE
     intent 'learned_red' is not a goal of the scene (green, purple, red)
@@ -175,7 +141,11 @@ def resolve_intents(
     intents: list[Intent] = []
     for name in names:
         if name in scene.goals:
-            intents.append(GoalIntent(name, scene.goals[name], **chosen.goal_options()))
+            try:
+                position = scene.goal(name, point)
+            except SceneError as error:
+                raise ReplayError(f"measured at {point}: {error}") from None
+            intents.append(GoalIntent(name, position, **chosen.goal_options()))
         elif name in built:
             intents.append(built[name])
         elif len(files.get(name, ())) == 1:
@@ -209,6 +179,7 @@ def replay_trial(
     preset: str | None = None,
     evidence: str | None = None,
     arbitration: str | None = None,
+    point: str | None = None,
     lam: float | None = None,
     epsilon: float = EPSILON,
     intents: Sequence[str] | None = None,
@@ -223,7 +194,12 @@ def replay_trial(
     scene : Scene
         Its goals and keyboard (speeds, control tick).
     preset, evidence, arbitration : str, optional
-        Default: the trial's own (:func:`trial_settings`).
+        Default: the trial's own (:func:`trial_settings`). The preset
+        :data:`~casa_core.vocabulary.DEFECTS_PRESET` redoes the original's numerics with
+        their defects (:mod:`casa_core.analysis.original_numerics`) over the scene's goals.
+    point : {"tool", "link7"}, optional
+        Where the arm is measured (:func:`trial_point`): the logged tool point, or link 7
+        from the logged joint angles, with the scene's link-7 goals.
     lam : float, optional
         Rate of the prior on beta; default the preset's.
     epsilon : float, default EPSILON
@@ -250,12 +226,24 @@ def replay_trial(
     chosen, arbitration = trial_settings(
         meta, preset=preset, evidence=evidence, arbitration=arbitration
     )
+    point = trial_point(meta, point)
     names = intents if intents is not None else meta.get("intents") or list(KNOWN_GOALS)
-    built = resolve_intents(list(names), scene, chosen, learned)
     teleop = scene.teleop
     per_step = int(round(DT / teleop.dt))
     if per_step < 1 or abs(per_step * teleop.dt - DT) > 1e-9:
         raise ReplayError(f"scene: teleop.dt = {teleop.dt} s does not divide {DT} s")
+    t = frame["t"].to_numpy(dtype=float)
+    states = _measured_states(frame, point)
+    # The tick of each row (t = tick * dt); inference runs at each multiple of per_step.
+    ticks = np.rint(t / teleop.dt).astype(int)
+    if chosen is DEFECTS:
+        if lam is not None:
+            raise ReplayError(f"preset {DEFECTS_PRESET} has the original's lambda; give no lam")
+        chosen_goals = _defect_goals(scene, list(names), point)
+        return _replay_defects(
+            t, ticks, per_step, states, chosen_goals, list(names), arbitration, epsilon
+        )
+    built = resolve_intents(list(names), scene, chosen, learned, point=point)
     options = chosen.assistant_options()
     if lam is not None:
         options["lam"] = lam
@@ -269,12 +257,8 @@ def replay_trial(
         tick=teleop.dt,
         **options,
     )
-    t = frame["t"].to_numpy(dtype=float)
-    states = frame[["x", "y", "z", "rot"]].to_numpy(dtype=float)
     keys = frame["keys"].fillna("").astype(str).tolist()
     applied = frame["alpha"].to_numpy(dtype=float) if "alpha" in frame else np.ones(len(t))
-    # The tick of each row (t = tick * dt); inference runs at each multiple of per_step.
-    ticks = np.rint(t / teleop.dt).astype(int)
     rows: list[dict] = []
     assistant.reset(states[0])
     done: set[int] = set()
@@ -300,6 +284,43 @@ def replay_trial(
             action = keys_to_action(parse_keys(keys[i]), teleop.speed, teleop.rot_speed)
             elapsed = (tick % per_step) * teleop.dt
             assistant.act(states[i], action, elapsed_in_step=elapsed, alpha=applied[i])
+    return pd.DataFrame(rows, columns=list(COLUMNS))
+
+
+def _measured_states(frame: pd.DataFrame, point: str) -> np.ndarray:
+    """The states ``[x, y, z, rot]`` at ``point``: the log's, or link 7 of its joint angles."""
+    states = frame[["x", "y", "z", "rot"]].to_numpy(dtype=float, copy=True)
+    if point == "link7":
+        missing = [name for name in JOINTS if name not in frame.columns]
+        if missing:
+            raise ReplayError(f"measured at link7: the log has no joint angles ({missing[0]})")
+        q = frame[list(JOINTS)].to_numpy(dtype=float)
+        states[:, :3] = [link7_position(row) for row in q]
+    return states
+
+
+def _defect_goals(scene: Scene, names: list[str], point: str) -> np.ndarray:
+    """The positions of the goals ``names`` at ``point``, for :data:`DEFECTS_PRESET`."""
+    unknown = [name for name in names if name not in scene.goals]
+    if unknown:
+        raise ReplayError(
+            f"preset {DEFECTS_PRESET} redoes goals only: {unknown[0]!r} is not a goal of the "
+            "scene (the original's learned costs are not in its sessions)"
+        )
+    try:
+        return np.array([scene.goal(name, point) for name in names])
+    except SceneError as error:
+        raise ReplayError(f"measured at {point}: {error}") from None
+
+
+def _replay_defects(t, ticks, per_step, states, goals, names, arbitration, epsilon):
+    """The original's numerics, defects included, at each inference tick of the log."""
+    # The inference ticks, at most the horizon's worth: the original's waypoints after the start.
+    first = {int(tick): i for i, tick in reversed(list(enumerate(ticks))) if i > 0}
+    steps = [i for tick, i in sorted(first.items()) if tick > 0 and tick % per_step == 0]
+    steps = steps[: int(round(HORIZON / DT))]
+    index = [0, *steps]
+    rows = original_rows(t[index], states[index, :3], goals, names, arbitration, epsilon)
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
 

@@ -40,7 +40,7 @@ from dataclasses import asdict, dataclass, replace
 
 from casa_core.assist.intents import COST_FORMS
 from casa_core.defaults import COST_PER_METRE, DT, LAM, SUBOPT_SCALE
-from casa_core.vocabulary import EVIDENCE
+from casa_core.vocabulary import DEFECTS_PRESET, EVIDENCE
 
 
 @dataclass(frozen=True)
@@ -125,6 +125,10 @@ PRESETS = {
 }
 #: The preset used when none is named.
 DEFAULT_PRESET = "casa"
+#: The settings of a replay that redoes the original's numerics with their defects
+#: (casa_core.analysis.original_numerics): the ``original`` preset's, named apart. Not in
+#: :data:`PRESETS`: the assistant never runs it.
+DEFECTS = replace(PRESETS["original"], name=DEFECTS_PRESET)
 
 
 def preset(name: str = DEFAULT_PRESET, *, evidence: str | None = None) -> Preset:

@@ -18,6 +18,7 @@ SUMMARY_COLUMNS = [
     "phase",
     "preset",
     "evidence",
+    "point",
     "arbitration",
     "steps",
     "max_diff_beta",
@@ -51,8 +52,19 @@ def register(commands) -> None:
     )
     command.add_argument("--out", required=True, metavar="DIR", help="folder of the tables")
     command.add_argument("--figures", metavar="DIR", help="folder of the figures (default: --out)")
-    command.add_argument("--preset", choices=vocabulary.PRESET_NAMES, help="inference preset")
+    command.add_argument(
+        "--preset",
+        choices=vocabulary.REPLAY_PRESETS,
+        help=f"inference preset ({vocabulary.DEFECTS_PRESET}: the original's numerics with "
+        "their defects, to check imported sessions against their logs)",
+    )
     command.add_argument("--evidence", choices=vocabulary.EVIDENCE, help="what the evidence is")
+    command.add_argument(
+        "--point",
+        choices=vocabulary.POINTS,
+        help="where the arm is measured: the tool point or link 7 (from the joint angles; "
+        "default: the trial's own, else tool)",
+    )
     command.add_argument(
         "--arbitration", help="confidence, distance, belief or none (default: the method's)"
     )
@@ -121,6 +133,7 @@ def _replay(args) -> int:
     scenes: dict[Path, object] = {}
     epsilon = EPSILON if args.epsilon is None else args.epsilon
     out, figures = Path(args.out), Path(args.figures or args.out)
+    figures.mkdir(parents=True, exist_ok=True)  # there even when no trial is replayed
     rows = []
     for trial in trials:
         root = trial["root"]
@@ -162,6 +175,7 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
         library_files,
         replay_differences,
         replay_trial,
+        trial_point,
         trial_settings,
     )
     from casa_core.figures.replay import replay_figure
@@ -182,7 +196,10 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
         chosen, arbitration = trial_settings(
             meta, preset=args.preset, evidence=args.evidence, arbitration=args.arbitration
         )
-        row.update(preset=chosen.name, evidence=chosen.evidence, arbitration=arbitration)
+        point = trial_point(meta, args.point)
+        row.update(
+            preset=chosen.name, evidence=chosen.evidence, point=point, arbitration=arbitration
+        )
         replayed = replay_trial(
             meta,
             check.frame,
@@ -190,6 +207,7 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
             preset=args.preset,
             evidence=args.evidence,
             arbitration=args.arbitration,
+            point=point,
             lam=args.lam,
             epsilon=epsilon,
             learned=library_files(args.intents, meta["participant"]),
@@ -201,7 +219,7 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
     title = (
         f"{stem.as_posix()}: {meta['method']} trial of {meta['participant']} "
         f"({meta['task']}, {meta['phase']}) replayed with preset {chosen.name}, evidence "
-        f"{chosen.evidence}, arbitration {arbitration}"
+        f"{chosen.evidence}, point {point}, arbitration {arbitration}"
     )
     fig = replay_figure(replayed, epsilon=epsilon, title=title)
     save_figure(fig, figures / stem.parent / f"{stem.name}.replay", formats=("png",))

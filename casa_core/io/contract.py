@@ -47,6 +47,7 @@ __all__ = [
     "LIKERT_SCORES",
     "META_ENUMS",
     "META_OPTIONAL",
+    "TRIAL_FLAGS",
     "META_REQUIRED",
     "METHODS",
     "PHASES",
@@ -79,7 +80,13 @@ INTENT_SUFFIX = ".intent.json"
 
 #: Metadata keys every trial has, and the ones it may have.
 META_REQUIRED = ("schema", "participant", "task", "method", "phase", "source")
-META_OPTIONAL = ("intents", "seed", "started_at", "notes", "max_duration", "inference")
+META_OPTIONAL = ("intents", "seed", "started_at", "notes", "max_duration", "inference", "flags")
+#: The flags a trial's metadata may carry (``"flags": [...]``), each with what it says.
+TRIAL_FLAGS = {
+    "no-user-command": "the user's command is zero throughout while the arm moves: the robot "
+    "drove, so the trial is not a person's own behaviour (analyses of people's behaviour, "
+    "such as calibrating simulated participants, leave it out)",
+}
 #: A trial's two files: ``<stem>.json`` (its metadata) and ``<stem>.csv`` (its ticks).
 TRIAL_SUFFIXES = (".json", ".csv")
 #: A dataset's own scene: this file at the dataset's top level (docs/data-contracts.md).

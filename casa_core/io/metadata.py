@@ -27,9 +27,10 @@ from casa_core.io.contract import (
     SCHEMA,
     TASK_PHASES,
     TASKS,
+    TRIAL_FLAGS,
 )
 from casa_core.io.problems import Problem
-from casa_core.vocabulary import EVIDENCE, PRESET_NAMES
+from casa_core.vocabulary import EVIDENCE, POINTS, REPLAY_PRESETS
 
 __all__ = ["META_RULES", "check_meta", "participant_id_problem"]
 
@@ -118,12 +119,24 @@ def _positive_number(value, meta: dict) -> str | None:
 
 
 def _inference(value, meta: dict) -> str | None:
-    allowed = {"preset": PRESET_NAMES, "evidence": EVIDENCE}
-    if not isinstance(value, dict) or set(value) != set(allowed):
-        return f"expected an object with the keys {', '.join(allowed)}"
+    allowed = {"preset": REPLAY_PRESETS, "evidence": EVIDENCE, "point": POINTS}
+    required = ("preset", "evidence")
+    if not isinstance(value, dict) or not set(required) <= set(value) <= set(allowed):
+        return f"expected an object with the keys {', '.join(required)} (and optionally point)"
     for key, names in allowed.items():
-        if value[key] not in names:
+        if key in value and value[key] not in names:
             return f"{key} is {value[key]!r}, expected one of {', '.join(names)}"
+    return None
+
+
+def _flags(value, meta: dict) -> str | None:
+    if not (isinstance(value, list) and all(isinstance(flag, str) for flag in value)):
+        return "expected a list of flags"
+    unknown = [flag for flag in value if flag not in TRIAL_FLAGS]
+    if unknown:
+        return f"{unknown[0]!r} is not a flag; known: {', '.join(TRIAL_FLAGS)}"
+    if len(set(value)) != len(value):
+        return "a flag is listed twice"
     return None
 
 
@@ -140,6 +153,7 @@ META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
     ("max_duration", "positive-number", _positive_number),
     ("seed", "integer", _integer),
     ("inference", "inference-settings", _inference),
+    ("flags", "trial-flags", _flags),
 )
 
 

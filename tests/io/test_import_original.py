@@ -318,7 +318,7 @@ def test_validate_names_the_key_of_a_bad_dataset_scene(sessions, tmp_path, capsy
     assert f"{scene}: key 'goals.red': [scene] missing" in capsys.readouterr().err
 
 
-def test_the_scene_holds_the_tool_points_of_the_reference_angles():
+def test_the_scene_holds_the_tool_points_and_link7_of_the_reference_angles():
     scene = load_scene(ORIGINAL_SCENE)
     roles = {"start": "start", "green": "goal 0", "purple": "goal 1", "red": "unknown goal"}
     assert set(REFERENCE_ANGLES) == set(roles.values())
@@ -326,45 +326,60 @@ def test_the_scene_holds_the_tool_points_of_the_reference_angles():
         tool = kin.forward_kinematics(reference_q(reference))[:3, 3]
         written = scene.start.position if name == "start" else scene.goals[name]
         assert np.allclose(written, tool, atol=0.0005 + 1e-9), name  # rounded to 1 mm
+        if name != "start":
+            link7 = kin.link7_position(reference_q(reference))
+            assert np.allclose(scene.goal(name, "link7"), link7, atol=0.0005 + 1e-9), name
+    # The original's goal 0 at link 7, to 1 mm, as docs/data-contracts.md gives it.
+    assert scene.link7_goals["green"] == (-0.548, -0.444, 0.424)
     assert scene.start.rot == 0.0
     # The file is plain YAML with the scene's keys and nothing else.
     assert set(yaml.safe_load(ORIGINAL_SCENE.read_text())) == {
         "start",
         "goals",
+        "link7",
         "pouring",
         "teleop",
     }
 
 
 @pytest.mark.pipeline
-def test_the_workflow_processes_an_imported_dataset_with_its_scene(sessions, tmp_path):
+def test_the_workflow_builds_and_replays_the_eleven_recorded_layouts(tmp_path):
     from tests.workflow.test_workflow import copy_workflow, snakemake
 
     repo = copy_workflow(tmp_path / "repo")
-    assert run_import(sessions, repo / "data" / "raw" / "original") == 0
+    folder = write_recorded(tmp_path / "sessions" / "P01")
+    assert run_import(folder, repo / "data" / "raw" / "original") == 0
     target = "data/processed/original/trials.csv"
     # Targets before --config, which takes every word after it.
     dry = snakemake(repo, target, "--dry-run", "--printshellcmds", "--config", "simulate=false")
     assert dry.returncode == 0, dry.stderr
     assert "--scene data/raw/original/scene.yaml" in dry.stdout
-    result = snakemake(repo, target, "--config", "simulate=false")
-    assert result.returncode == 0, result.stderr
-    trials = pd.read_csv(repo / target, keep_default_na=False)
-    assert len(trials) == 4 and set(trials["dataset"]) == {"original"}
-    # The default target takes the imported dataset all the way: its statistics, its
+    # The default target takes the imported dataset all the way: its tables, statistics,
     # figures and the replay of its assisted trials, with its own scene.
     result = snakemake(repo, "--config", "simulate=false")
     assert result.returncode == 0, result.stderr
+    trials = pd.read_csv(repo / target, keep_default_na=False)
+    assert len(trials) == 9 and set(trials["dataset"]) == {"original"}
+    flagged = trials.loc[trials["flags"] != "", "trial"].tolist()
+    assert flagged == ["P01/task4a"] and set(trials["preset"]) == {"original_defects"}
     replayed = pd.read_csv(repo / "data/processed/original/replay/replay.csv")
     status = dict(zip(replayed["trial"], replayed["status"], strict=True))
     # NA is not replayed by default; the original's learned intents are not imported.
     assert status == {
-        "P03/task1a": "skipped",
-        "P03/task1b": "replayed",
-        "P03/task1c": "replayed",
-        "P03/task2c_learned": "skipped",
+        "P01/task0c": "replayed",
+        "P01/task1a": "skipped",
+        "P01/task1b": "replayed",
+        "P01/task1c": "replayed",
+        "P01/task2a": "skipped",
+        "P01/task2b": "replayed",
+        "P01/task2c": "replayed",
+        "P01/task4a": "skipped",
+        "P01/task4c_learned": "skipped",
     }
-    assert set(replayed.loc[replayed["status"] == "replayed", "preset"]) == {"original"}
+    done = replayed[replayed["status"] == "replayed"]
+    assert set(done["preset"]) == {"original_defects"} and set(done["point"]) == {"link7"}
+    learned = replayed.set_index("trial").loc["P01/task4c_learned", "reason"]
+    assert "'learned_pour' is not a goal of the scene" in learned
     assert list((repo / "figures/original/replay").rglob("*.replay.png"))
     for name in ("objective.png", "objective.pdf"):
         assert (repo / "figures/original" / name).stat().st_size > 0
@@ -440,12 +455,16 @@ def object_array(value):
     return array
 
 
-def recorded_layout(n, m, goals, with_beta, costs, seed):
+#: The recorded session whose user command is zero on every row while the arm moves.
+ROBOT_DROVE = "task4a_data.npz"
+
+
+def recorded_layout(n, m, goals, with_beta, costs, seed, *, command=True):
     rng = np.random.default_rng(seed)
     time = np.sort(rng.uniform(0.0, 15.0, n))
     time[0] = 0.0
     q = joint_angles(time)
-    command = np.array([command_of(qi, [0.0, 0.0, 0.05]) for qi in q])
+    command = np.array([command_of(qi, [0.0, 0.0, 0.05 * command]) for qi in q])
     # Late steps keep their times: every 0.5 s, but one step of 2 s after the fifth.
     timed = 0.5 * np.arange(1, m + 1) + np.where(np.arange(1, m + 1) > 5, 1.5, 0.0)
     belief = rng.dirichlet(np.ones(goals), m + 1)
@@ -471,15 +490,35 @@ def recorded_layout(n, m, goals, with_beta, costs, seed):
     return arrays
 
 
-def test_every_recorded_layout_imports_with_its_steps_real_times(tmp_path):
-    folder = tmp_path / "sessions" / "P01"
+def write_recorded(folder):
+    """The eleven recorded layouts in ``folder``, the robot driving in :data:`ROBOT_DROVE`."""
     folder.mkdir(parents=True)
     for seed, (name, layout) in enumerate(RECORDED.items()):
-        np.savez(folder / name, **recorded_layout(*layout, seed=seed))
+        arrays = recorded_layout(*layout, seed=seed, command=name != ROBOT_DROVE)
+        np.savez(folder / name, **arrays)
+    return folder
+
+
+def test_every_recorded_layout_imports_with_its_steps_real_times(tmp_path, capsys):
+    folder = write_recorded(tmp_path / "sessions" / "P01")
     out = tmp_path / "out"
     assert run_import(folder, out) == 0
     stems = {p.stem for p in (out / "P01").glob("*.json")}
     assert stems == {n.removesuffix("_data.npz") for n in RECORDED if "ex_" not in n}
+    # The session the robot drove is imported, said and flagged; no other is.
+    printed = capsys.readouterr().out
+    warning = f"{folder / ROBOT_DROVE}: key 'joy_cmd': warning [no-user-command] the user's"
+    assert printed.count("warning [no-user-command]") == 1 and warning in printed
+    flags = {
+        stem: json.loads((out / "P01" / f"{stem}.json").read_text()).get("flags") for stem in stems
+    }
+    assert flags.pop("task4a") == ["no-user-command"] and set(flags.values()) == {None}
+    meta, _ = read_trial(out / "P01" / "task1c")
+    assert meta["inference"] == {
+        "preset": "original_defects",
+        "evidence": "executed",
+        "point": "link7",
+    }
     # Row 0 holds from t = 0; row k from inf_start_time[k - 1], late steps at their time.
     arrays = recorded_layout(*RECORDED["task2c_data.npz"], seed=7)
     _, frame = read_trial(out / "P01" / "task2c")

@@ -26,6 +26,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from casa_core.defaults import HORIZON
 from casa_core.io import Problem, atomic_write_text, check_meta, frame_to_csv_text, write_trial
 from casa_core.io.contract import SCENE_NAME
@@ -39,7 +41,7 @@ from casa_core.io.problems import errors
 from casa_core.io.trial_log import inside, trial_files
 from casa_core.io.validation import parse_trial_csv
 from casa_core.scene import DEFAULT_SCENE, KNOWN_GOALS, load_scene
-from casa_core.vocabulary import LEARNED_NAMES, PHASE_METHOD, TASK_PHASES
+from casa_core.vocabulary import DEFECTS_PRESET, LEARNED_NAMES, PHASE_METHOD, TASK_PHASES
 
 #: The scene of the original's layout, copied into every imported dataset by default.
 ORIGINAL_SCENE = DEFAULT_SCENE.with_name("scene-original.yaml")
@@ -124,15 +126,34 @@ def goal_names(name: SessionName, goals: int) -> list[str]:
 @dataclass
 class ImportResult:
     """What :func:`import_original` did: trials ``written`` (stems), ``skipped`` files with
-    their reason, and the ``bad`` files left out (with ``skip_bad``)."""
+    their reason, the ``bad`` files left out (with ``skip_bad``) and ``warnings`` on
+    trials written."""
 
     written: list[Path] = field(default_factory=list)
     skipped: list[tuple[str, str]] = field(default_factory=list)
     bad: list[Problem] = field(default_factory=list)
+    warnings: list[Problem] = field(default_factory=list)
 
 
-def _convert(path: Path, name: SessionName, participant: str, target: Path):
-    """The metadata and frame of one session, checked as write_trial will check them."""
+#: The flag of a session in which the robot drove.
+NO_USER_COMMAND = "no-user-command"
+#: Tool travel (m) beyond which a session without any user command is one the robot drove.
+ROBOT_TRAVEL = 0.05
+
+
+def _robot_drove(session, frame) -> float | None:
+    """The tool's travel (m) if the user's command is zero throughout while the arm moves
+    more than :data:`ROBOT_TRAVEL`; else None."""
+    if np.any(session.command):
+        return None
+    path = frame[["x", "y", "z"]].to_numpy(dtype=float)
+    travel = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+    return travel if travel > ROBOT_TRAVEL else None
+
+
+def _convert(path: Path, name: SessionName, participant: str, target: Path, warnings: list):
+    """The metadata and frame of one session, checked as write_trial will check them;
+    ``warnings`` gets what is imported but said (a session the robot drove)."""
     session = read_session(path)
     names = goal_names(name, session.belief.shape[1])
     converted = convert_session(session, name.method, names)
@@ -153,10 +174,19 @@ def _convert(path: Path, name: SessionName, participant: str, target: Path):
         "source": "human",
         "intents": names,
         "max_duration": HORIZON,
-        # The original's own numerics (casa_core.assist.presets): a replay redoes them.
-        "inference": {"preset": "original", "evidence": "executed"},
+        # What computed the logged numbers: the original, defects included, at link 7.
+        "inference": {"preset": DEFECTS_PRESET, "evidence": "executed", "point": "link7"},
         "notes": notes,
     }
+    travel = _robot_drove(session, frame)
+    if travel is not None:
+        meta["flags"] = [NO_USER_COMMAND]
+        warning = (
+            f"the user's command is zero on every row while the arm travels {travel:.2f} m: "
+            f"the robot drove; imported with the flag {NO_USER_COMMAND}, which analyses of "
+            "people's behaviour (calibration) leave out"
+        )
+        warnings.append(Problem(str(path), "key 'joy_cmd'", NO_USER_COMMAND, warning, "warning"))
     if (start := started_at(session)) is not None:
         meta["started_at"] = start
     json_path, csv_path = trial_files(target)
@@ -232,6 +262,7 @@ def import_original(
     scene_text = scene_path.read_text(encoding="utf-8")
     result, trials = ImportResult(), []
     problems: list[Problem] = []
+    warnings: list[Problem] = []
     for path in sorted(folder.iterdir()):
         if path.name.startswith("."):
             continue
@@ -244,7 +275,7 @@ def import_original(
                 result.skipped.append((path.name, name))
                 continue
             target = out / participant / name.stem
-            trials.append((target, *_convert(path, name, participant, target)))
+            trials.append((target, *_convert(path, name, participant, target, warnings)))
         except SessionError as error:
             (result.bad if skip_bad else problems).extend(error.problems)
     if not force:
@@ -258,6 +289,7 @@ def import_original(
     for target, meta, frame in trials:
         write_trial(target, meta, frame)
         result.written.append(target)
+    result.warnings = warnings
     return result
 
 
@@ -273,6 +305,7 @@ def describe(result: ImportResult, out: Path | str) -> str:
     lines = [f"wrote {os.fspath(target)}.json, .csv" for target in result.written]
     lines += [f"skipped {name}: {reason}" for name, reason in result.skipped]
     lines += [f"left out: {problem}" for problem in result.bad]
+    lines += [str(problem) for problem in result.warnings]
     bad_files = len({problem.file for problem in result.bad})
     lines.append(
         f"{len(result.written)} trial(s) written to {out}, {len(result.skipped)} file(s) "

@@ -1,0 +1,82 @@
+"""The settings a replay uses: preset, evidence, arbitration and the point it measures.
+
+Each is the trial's own (its metadata) unless given; :mod:`casa_core.analysis.replay`
+redoes the inference with them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from casa_core.assist.assistant import ARBITRATIONS
+from casa_core.assist.presets import DEFAULT_PRESET, DEFECTS, Preset
+from casa_core.assist.presets import preset as named_preset
+from casa_core.vocabulary import DEFECTS_PRESET, METHOD_ARBITRATION, POINTS
+
+
+class ReplayError(ValueError):
+    """A trial that cannot be replayed as asked; the message names the trial and the reason."""
+
+
+def trial_settings(
+    meta: dict,
+    *,
+    preset: str | None = None,
+    evidence: str | None = None,
+    arbitration: str | None = None,
+) -> tuple[Preset, str]:
+    """The preset (evidence applied) and arbitration a replay of the trial uses.
+
+    Each is the trial's own unless given: the preset and evidence of
+    ``meta["inference"]`` (absent: :data:`~casa_core.assist.presets.DEFAULT_PRESET` and its
+    evidence), the arbitration of ``meta["method"]`` (:data:`METHOD_ARBITRATION`).
+
+    Examples
+    --------
+    >>> meta = {"method": "PBA", "inference": {"preset": "original", "evidence": "executed"}}
+    >>> chosen, arbitration = trial_settings(meta)
+    >>> chosen.name, chosen.evidence, arbitration
+    ('original', 'executed', 'distance')
+    >>> trial_settings(meta, preset="casa", arbitration="confidence")[0].evidence
+    'commanded'
+    """
+    recorded: Any = meta.get("inference") if isinstance(meta.get("inference"), dict) else {}
+    if preset is None:
+        preset = recorded.get("preset", DEFAULT_PRESET)
+        # The trial's evidence goes with its own preset; another preset brings its own.
+        evidence = recorded.get("evidence") if evidence is None else evidence
+    if preset == DEFECTS_PRESET:
+        if evidence not in (None, DEFECTS.evidence):
+            raise ReplayError(f"preset {DEFECTS_PRESET} observes the executed path, not {evidence}")
+        chosen = DEFECTS
+    else:
+        chosen = named_preset(preset, evidence=evidence)
+    if arbitration is None:
+        method = meta.get("method")
+        if method not in METHOD_ARBITRATION:
+            raise ReplayError(f"method {method!r} has no arbitration; give one")
+        arbitration = METHOD_ARBITRATION[method]
+    if arbitration not in ARBITRATIONS:
+        raise ReplayError(f"arbitration must be one of {', '.join(ARBITRATIONS)}: {arbitration!r}")
+    return chosen, arbitration
+
+
+def trial_point(meta: dict, point: str | None = None) -> str:
+    """Where a replay of the trial measures the arm: ``point`` if given, else the trial's
+    own (``meta["inference"]["point"]``), else ``"tool"``.
+
+    The point says where the log's numbers were measured, so it is kept under another
+    preset unless given.
+
+    Examples
+    --------
+    >>> trial_point({"inference": {"preset": "original", "point": "link7"}})
+    'link7'
+    >>> trial_point({}), trial_point({}, "link7")
+    ('tool', 'link7')
+    """
+    recorded: Any = meta.get("inference") if isinstance(meta.get("inference"), dict) else {}
+    point = recorded.get("point", POINTS[0]) if point is None else point
+    if point not in POINTS:
+        raise ReplayError(f"point must be one of {', '.join(POINTS)}: {point!r}")
+    return point
