@@ -57,3 +57,37 @@ def test_the_conda_environment_has_the_pins_of_pyproject():
     env = yaml.safe_load((ROOT / "workflow" / "envs" / "casa.yaml").read_text(encoding="utf-8"))
     pip = next(d["pip"] for d in env["dependencies"] if isinstance(d, dict))
     assert {d for d in pip if not d.startswith("--")} == pins
+
+
+#: Calls that can run code held in a file: unpickling (numpy with pickles allowed,
+#: pickle, torch.load, which unpickles) and YAML's full loaders.
+CODE_RUNNING_LOADS = re.compile(
+    r"allow_pickle\s*=\s*True|\bpickle\.loads?\(|\btorch\.load\(|yaml\.(unsafe_)?load\(|"
+    r"yaml\.full_load\(|\beval\(|\bexec\("
+)
+
+
+def code_running_loads(text: str) -> list[str]:
+    return [line.strip() for line in text.splitlines() if CODE_RUNNING_LOADS.search(line)]
+
+
+def test_no_loader_of_the_package_or_workflow_can_run_code_from_a_file():
+    files = [*(ROOT / "casa_core").rglob("*.py"), *(ROOT / "workflow").rglob("*.smk")]
+    found = {
+        str(path.relative_to(ROOT)): hits
+        for path in files
+        if (hits := code_running_loads(path.read_text(encoding="utf-8")))
+    }
+    assert found == {}
+
+
+def test_the_loader_check_sees_each_kind_of_code_running_load():
+    planted = [
+        "np.load(path, allow_pickle=True)",
+        "pickle.load(handle)",
+        "torch.load(path)",
+        "yaml.load(text, Loader=yaml.Loader)",
+        "yaml.unsafe_load(text)",
+    ]
+    assert code_running_loads("\n".join(planted)) == planted
+    assert code_running_loads("np.load(path, allow_pickle=False)\nyaml.safe_load(text)") == []

@@ -151,12 +151,12 @@ def _robot_drove(session, frame) -> float | None:
     return travel if travel > ROBOT_TRAVEL else None
 
 
-def _convert(path: Path, name: SessionName, participant: str, target: Path, warnings: list):
+def _convert(path, name: SessionName, participant: str, target: Path, scene, warnings: list):
     """The metadata and frame of one session, checked as write_trial will check them;
     ``warnings`` gets what is imported but said (a session the robot drove)."""
     session = read_session(path)
     names = goal_names(name, session.belief.shape[1])
-    converted = convert_session(session, name.method, names)
+    converted = convert_session(session, name.method, names, scene.link7_goals or None)
     frame = converted.frame
     notes = (
         f"imported from the original implementation's session file {path.name}: "
@@ -258,7 +258,7 @@ def import_original(
         raise SessionError([Problem(str(folder), "", "read-only", message)])
     participant = participant or folder.resolve().name
     scene_path = ORIGINAL_SCENE if scene is None else Path(scene)
-    load_scene(scene_path)  # a SceneError names the file and the key
+    scene_used = load_scene(scene_path)  # a SceneError names the file and the key
     scene_text = scene_path.read_text(encoding="utf-8")
     result, trials = ImportResult(), []
     problems: list[Problem] = []
@@ -275,7 +275,8 @@ def import_original(
                 result.skipped.append((path.name, name))
                 continue
             target = out / participant / name.stem
-            trials.append((target, *_convert(path, name, participant, target, warnings)))
+            converted = _convert(path, name, participant, target, scene_used, warnings)
+            trials.append((target, *converted))
         except SessionError as error:
             (result.bad if skip_bad else problems).extend(error.problems)
     if not force:

@@ -30,7 +30,8 @@ original implementation's sessions"); in short:
   the trial's ``notes``. alpha: CASA
   ``clip(1 / beta of the most likely goal, 0, 1)`` (a negative beta gives 0, as the
   original applied it); PBA ``clip(d / 0.55, 0, 1)`` with ``d`` the distance of link 7
-  (the original's end effector) at the step to the most likely goal's link-7 position;
+  (the original's end effector) at the step to the most likely goal's link-7 position (the
+  scene's `link7`, else the link 7 of the original's goal angles);
   NA 1.
 """
 
@@ -232,7 +233,7 @@ def _held(times: np.ndarray, ticks: np.ndarray) -> np.ndarray:
     return np.searchsorted(times, ticks + 1e-9, side="right") - 1
 
 
-def convert_session(session: Session, method: str, goal_names) -> Converted:
+def convert_session(session: Session, method: str, goal_names, link7_goals=None) -> Converted:
     """The casa-trial/1 time series of a session (module docs give the rules).
 
     Parameters
@@ -242,6 +243,10 @@ def convert_session(session: Session, method: str, goal_names) -> Converted:
         How alpha is recomputed from the logged inference.
     goal_names : sequence of str
         Our names of the session's goals, in its order (``belief_hist``'s columns).
+    link7_goals : mapping of str to 3 floats, optional
+        The link-7 positions of the known goals, from which PBA's distance is measured
+        (the scene's ``link7``); default the link 7 of the original's goal angles
+        (:data:`REFERENCE_ANGLES`).
 
     Raises
     ------
@@ -287,7 +292,7 @@ def convert_session(session: Session, method: str, goal_names) -> Converted:
         finite = np.isfinite(beta).all(axis=1)
         beta, bad_betas = _carry(beta, finite, np.zeros(goals)), int(np.sum(~finite))
     negative = 0 if beta is None else int(np.sum(beta < 0))
-    alphas = _step_alphas(session, method, belief, beta, goal_names)
+    alphas = _step_alphas(session, method, belief, beta, goal_names, link7_goals)
     at_step = _held(session.steps, ticks)
     before = at_step < 0
     index = np.maximum(at_step, 0)
@@ -300,7 +305,7 @@ def convert_session(session: Session, method: str, goal_names) -> Converted:
     return Converted(pd.DataFrame(table), negative, bad, bad_betas, len(session.time))
 
 
-def _step_alphas(session: Session, method: str, belief, beta, goal_names) -> np.ndarray:
+def _step_alphas(session: Session, method: str, belief, beta, goal_names, link7_goals):
     """alpha after each inference step, as the original arbitrated it."""
     steps = len(session.steps)
     if method == "NA" or not steps:
@@ -317,7 +322,15 @@ def _step_alphas(session: Session, method: str, belief, beta, goal_names) -> np.
     if np.any(likely >= len(known)):
         message = f"PBA predicts a goal without a known position; known: {', '.join(known)}"
         raise SessionError([Problem(session.file, "key 'belief_hist'", "goal", message)])
-    targets = np.array([kin.link7_position(reference_q(f"goal {g}")) for g in likely])
+    if link7_goals is None:
+        link7_goals = {
+            name: kin.link7_position(reference_q(f"goal {g}")) for g, name in enumerate(KNOWN_GOALS)
+        }
+    missing = [name for name in known if name not in link7_goals]
+    if missing:
+        message = f"PBA's distance needs the link-7 position of goal {missing[0]!r}"
+        raise SessionError([Problem(session.file, "scene: link7", "goal", message)])
+    targets = np.array([link7_goals[known[g]] for g in likely], dtype=float)
     unwrapped = np.unwrap(session.q, axis=0)
     q = np.column_stack([np.interp(session.steps, session.time, unwrapped[:, j]) for j in range(7)])
     distance = np.linalg.norm([kin.link7_position(row) for row in q] - targets, axis=1)

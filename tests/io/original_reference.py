@@ -1,0 +1,124 @@
+"""Test-side reference of what the original shared-autonomy code computed at each step.
+
+Written in plain numpy from the original's "section 4", independently of the package
+(only :func:`casa_core.robot.kinematics.link7_position` is used), to generate synthetic
+session files whose logged histories the package's replay must reproduce to 1e-9.
+
+Specification. Step ``i = 0, 1, ...`` sees the link-7 waypoints ``w_0..w_i`` (metres,
+one every 0.5 s); goal ``gi`` is at ``G_gi``, goal 0 is ``G_0``.
+
+* cost ``C(path) = 50 / 0.22 * path length``; prefix ``C(w_0..w_i)`` (0 at ``i = 0``),
+  to-go ``C(w_i, G_gi)``, optimal ``C(w_0, G_gi)``;
+* ``S_gi = (prefix + to-go_gi - optimal_gi) / 1.8``;
+* faithful: ``S = max(S, 0)``, ``beta = 3.5 i / (S + 4)``, belief ``~ exp(-beta S)
+  (beta / 2 pi)^(3.5 i)`` with a uniform prior, in log space; the log-likelihood is 0
+  at ``i = 0`` (``0 log 0 = 0``) and a zero ``beta S`` counts as 0;
+* defects (as it ran in Python 2): (a) ``beta = floor(3.5 i) / (S + 4)`` and exponent
+  ``3 i``; (b) the prefix of every goal gets ``100 |w_i - G_0|`` added (also at
+  ``i = 0``); (c) ``S`` not clamped; (d) belief in linear space, ``exp(-beta S)
+  (beta / 2 pi)**(3 i)`` normalised over goals, 0/0 giving nan;
+* arbitration (alpha, the human's share): CASA ``clip(1 / beta[argmax belief], 0, 1)``;
+  PBA uses the belief at ``beta = 1`` for every goal and ``clip(|w_i - G*| / 0.55, 0, 1)``
+  for its most likely goal ``G*``; NA ``1``. ``argmax`` is ``np.argmax``: first index on
+  ties, and the first nan if the belief has one (so an all-nan belief picks goal 0).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from casa_core.robot.kinematics import link7_position
+
+COST_PER_METRE = 50 / 0.22
+SUB_SCALE = 1.8
+POSE_PENALTY_PER_METRE = 100.0
+PBA_DISTANCE = 0.55
+METHODS = ("CASA", "PBA", "NA")
+
+
+def link7_waypoints(q_waypoints) -> np.ndarray:
+    """Link-7 positions ``(m+1, 3)`` of joint waypoints ``(m+1, 7)`` in radians."""
+    return np.array([link7_position(np.asarray(q, dtype=float)) for q in q_waypoints])
+
+
+def path_cost(points) -> float:
+    """``50 / 0.22`` times the length of the polyline through ``points`` ``(n, 3)``."""
+    segments = np.diff(np.asarray(points, dtype=float), axis=0)
+    return COST_PER_METRE * float(np.sum(np.linalg.norm(segments, axis=1)))
+
+
+def suboptimality(waypoints, goals, i, *, defects: bool) -> np.ndarray:
+    """``S`` ``(g,)`` at step ``i``: clamped at 0 unless ``defects`` (which adds the penalty)."""
+    w = np.asarray(waypoints, dtype=float)[: i + 1]
+    goals = np.asarray(goals, dtype=float)
+    prefix = path_cost(w)
+    if defects:
+        prefix += POSE_PENALTY_PER_METRE * float(np.linalg.norm(w[i] - goals[0]))
+    to_go = np.array([path_cost([w[i], goal]) for goal in goals])
+    optimal = np.array([path_cost([w[0], goal]) for goal in goals])
+    sub = (prefix + to_go - optimal) / SUB_SCALE
+    return sub if defects else np.maximum(sub, 0.0)
+
+
+def map_beta(sub, i, *, defects: bool) -> np.ndarray:
+    """``beta = 3.5 i / (S + 4)``, with ``floor(3.5 i) = (7 i) // 2`` if ``defects``."""
+    numerator = float((7 * i) // 2) if defects else 3.5 * i
+    return numerator / (np.asarray(sub, dtype=float) + 4.0)
+
+
+def belief(sub, beta, i, *, defects: bool) -> np.ndarray:
+    """Posterior ``(g,)`` over goals, uniform prior, given ``S`` and ``beta`` per goal."""
+    sub = np.asarray(sub, dtype=float)
+    beta = np.broadcast_to(np.asarray(beta, dtype=float), sub.shape)
+    if defects:  # linear space, exponent 3 i; nan where 0/0 or inf * 0
+        with np.errstate(all="ignore"):
+            likelihood = np.exp(-beta * sub) * (beta / (2 * np.pi)) ** (3 * i)
+            return likelihood / np.sum(likelihood)
+    if i == 0:
+        log_likelihood = np.zeros_like(sub)
+    else:
+        beta_sub = beta * sub
+        beta_sub = np.where(beta_sub == 0, 0.0, beta_sub)
+        log_likelihood = -beta_sub + 3.5 * i * np.log(beta / (2 * np.pi))
+    peak = np.max(log_likelihood)
+    log_norm = peak + np.log(np.sum(np.exp(log_likelihood - peak)))
+    return np.exp(log_likelihood - log_norm)
+
+
+def step(waypoints, goals, i, *, defects: bool) -> dict:
+    """``{"sub", "beta", "belief"}``, each ``(g,)``, of step ``i`` over ``waypoints[0..i]``."""
+    sub = suboptimality(waypoints, goals, i, defects=defects)
+    beta = map_beta(sub, i, defects=defects)
+    return {"sub": sub, "beta": beta, "belief": belief(sub, beta, i, defects=defects)}
+
+
+def alpha(result, waypoint, goals, i, *, defects: bool, method: str) -> tuple[float, np.ndarray]:
+    """``(alpha, belief the method uses)`` of one step's ``result`` (from :func:`step`)."""
+    if method == "NA":
+        return 1.0, result["belief"]
+    if method == "CASA":
+        likely = int(np.argmax(result["belief"]))
+        with np.errstate(divide="ignore"):
+            share = 1.0 / result["beta"][likely]  # beta = 0 -> inf -> 1
+        return float(np.clip(share, 0.0, 1.0)), result["belief"]
+    if method == "PBA":
+        pba_belief = belief(result["sub"], 1.0, i, defects=defects)
+        goal = np.asarray(goals, dtype=float)[int(np.argmax(pba_belief))]
+        distance = float(np.linalg.norm(np.asarray(waypoint, dtype=float) - goal))
+        return float(np.clip(distance / PBA_DISTANCE, 0.0, 1.0)), pba_belief
+    raise ValueError(f"method must be one of {METHODS}, not {method!r}")
+
+
+def histories(waypoints, goals, *, defects: bool, method: str) -> dict:
+    """One row per step ``i = 0..m``: ``sub``, ``beta`` (MAP), ``belief`` (the method's)
+    ``(m+1, g)`` and ``alpha`` ``(m+1,)``."""
+    waypoints = np.asarray(waypoints, dtype=float)
+    rows = {"sub": [], "beta": [], "belief": [], "alpha": []}
+    for i in range(len(waypoints)):
+        result = step(waypoints, goals, i, defects=defects)
+        share, used = alpha(result, waypoints[i], goals, i, defects=defects, method=method)
+        rows["sub"].append(result["sub"])
+        rows["beta"].append(result["beta"])
+        rows["belief"].append(used)
+        rows["alpha"].append(share)
+    return {key: np.array(value, dtype=float) for key, value in rows.items()}
