@@ -180,7 +180,15 @@ def _coerce(value: Any, node: dict) -> Any:
     """Command-line strings converted to the type the schema wants there, where they parse."""
     if isinstance(value, dict):
         properties = node.get("properties", {})
-        return {k: _coerce(v, properties[k]) if k in properties else v for k, v in value.items()}
+        others = node.get("additionalProperties")
+        others = others if isinstance(others, dict) else None
+        return {
+            k: _coerce(v, properties.get(k, others)) if k in properties or others else v
+            for k, v in value.items()
+        }
+    if isinstance(value, list):  # --config 'power={sizes: [10, 12]}' gives ['10', '12']
+        items = node.get("items")
+        return [_coerce(v, items) for v in value] if isinstance(items, dict) else value
     if not isinstance(value, str):
         return value
     kind = node.get("type")

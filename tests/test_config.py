@@ -180,6 +180,20 @@ def test_command_line_strings_become_the_schemas_types():
     assert config["allow_invalid"] is True and config["simulation"]["participants"] == 3
     with pytest.raises(ConfigError, match="--config: allow_invalid: must be a boolean"):
         load_config(CONFIG, overrides={"allow_invalid": "maybe"})
+    # List items as Snakemake hands them over (strings), converted as single values are.
+    config = load_config(CONFIG, overrides={"power": {"sizes": ["10", "12"], "replicates": "20"}})
+    assert config["power"]["sizes"] == [10, 12] and config["power"]["replicates"] == 20
+    with pytest.raises(ConfigError, match="--config: power.sizes.0: must be an integer"):
+        load_config(CONFIG, overrides={"power": {"sizes": ["ten"]}})
+
+
+@pytest.mark.pipeline
+def test_snakemake_takes_list_values_on_the_command_line(workflow_copy):
+    config = "power={sizes: [10, 12], replicates: 20}"
+    result = snakemake(workflow_copy, "--dry-run", "power", "--config", config)
+    assert result.returncode == 0, result.stdout + result.stderr
+    seen = yaml.safe_load((workflow_copy / "data" / "interim" / "config.yaml").read_text())
+    assert seen["power"]["sizes"] == [10, 12] and seen["power"]["replicates"] == 20
 
 
 def test_unreadable_files_are_named(tmp_path):
