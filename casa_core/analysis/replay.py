@@ -141,10 +141,7 @@ def resolve_intents(
     intents: list[Intent] = []
     for name in names:
         if name in scene.goals:
-            try:
-                position = scene.goal(name, point)
-            except SceneError as error:
-                raise ReplayError(f"measured at {point}: {error}") from None
+            position = _goal_at(scene, name, point)
             intents.append(GoalIntent(name, position, **chosen.goal_options()))
         elif name in built:
             intents.append(built[name])
@@ -307,8 +304,13 @@ def _defect_goals(scene: Scene, names: list[str], point: str) -> np.ndarray:
             f"preset {DEFECTS_PRESET} redoes goals only: {unknown[0]!r} is not a goal of the "
             "scene (the original's learned costs are not in its sessions)"
         )
+    return np.array([_goal_at(scene, name, point) for name in names])
+
+
+def _goal_at(scene: Scene, name: str, point: str) -> np.ndarray:
+    """Goal ``name``'s position at ``point``; ReplayError when the scene does not give it."""
     try:
-        return np.array([scene.goal(name, point) for name in names])
+        return scene.goal(name, point)
     except SceneError as error:
         raise ReplayError(f"measured at {point}: {error}") from None
 
