@@ -48,4 +48,4 @@ rule all:
     input:
         all_outputs(),
         report_pages(),
-        rules.robustness.input if SIMULATE else [],
+        rules.robustness.input if SIMULATE and WHOLE_BUILD else [],

@@ -91,6 +91,11 @@ replays = read(simulated / "replay" / "replay.csv")
 replayed = replays[replays["status"] == "replayed"]["trial"].tolist()
 if not replayed:
     problems.append("simulated/replay: no trial replayed")
+# Every assisted trial, after learning included (with the intents each participant's
+# folder keeps).
+for _, row in replays[replays["status"] != "replayed"].iterrows():
+    if row["method"] != "NA":
+        problems.append(f"simulated/replay: {row['trial']} {row['status']}: {row['reason']}")
 for trial in replayed:
     check_file(FIGS / "simulated" / "replay" / f"{trial}.replay.png")
 if replayed:

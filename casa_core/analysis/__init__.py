@@ -42,6 +42,7 @@ from casa_core.analysis.metrics import (
 from casa_core.analysis.replay import (
     COLUMNS,
     ReplayError,
+    kept_intent_files,
     library_files,
     replay_differences,
     replay_trial,
@@ -67,6 +68,7 @@ __all__ = [
     "held_keys",
     "key_presses",
     "key_ticks",
+    "kept_intent_files",
     "library_files",
     "relative_effort",
     "replay_differences",

@@ -134,6 +134,8 @@ def validation_table(
         file = _relative(check.file, root)
         if check.kind == "other" and not check.problems:
             rows.append((file, check.kind, "ignored", "", "", "not a .csv or .json: not read"))
+        elif check.kind == "intent":
+            rows.append((file, check.kind, "ignored", "", "", "a learned intent: read by replay"))
         elif not check.problems:
             rows.append((file, check.kind, "ok", "", "", ""))
         else:

@@ -99,6 +99,36 @@ def library_files(library: Path | str | None, participant: str | None = None) ->
     return sorted(library.rglob(f"*{INTENT_SUFFIX}"))
 
 
+def kept_intent_files(trial: Path | str, root: Path | str) -> list[Path]:
+    """The learned intents a dataset keeps for a trial: its participant's library.
+
+    The casa-intent files below the nearest folder that has any, from the trial's own
+    folder up to its top folder below ``root`` (the dataset folder; ``root`` itself for
+    a trial at the top): a participant's intents live in the participant's folder,
+    wherever below it (``casa session`` keeps them in ``.session/library/``, the
+    simulated study in ``intents/<task>/``), and never serve another participant.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> root = Path(tempfile.mkdtemp())
+    >>> for part in ("p1/before", "p1/.session/library", "p2/before"):
+    ...     (root / part).mkdir(parents=True)
+    >>> _ = (root / "p1/.session/library/learned_red.intent.json").write_text("{}")
+    >>> [p.relative_to(root).as_posix() for p in kept_intent_files(root / "p1/before/t.csv", root)]
+    ['p1/.session/library/learned_red.intent.json']
+    >>> kept_intent_files(root / "p2/before/t.csv", root)
+    []
+    """
+    root = Path(root)
+    folder = Path(trial).parent
+    while True:
+        found = sorted(folder.rglob(f"*{INTENT_SUFFIX}"))
+        if found or folder == root or folder.parent == root or root not in folder.parents:
+            return found
+        folder = folder.parent
+
+
 def resolve_intents(
     names: Sequence[str],
     scene: Scene,

@@ -13,7 +13,7 @@ def register(commands) -> None:
         "library",
         help="inspect an intent library",
         description="Inspect the learned intents (casa-intent files) of a library folder.",
-        **example("casa library list data/processed/simulated/intents"),
+        **example("casa library list data/raw/simulated"),
     )
     actions = command.add_subparsers(dest="action", metavar="ACTION", required=True)
     listing = actions.add_parser(
@@ -23,7 +23,7 @@ def register(commands) -> None:
         "library below it (e.g. one folder per participant), with its folder. Report each "
         "unusable file on stderr with the rule it breaks; exit 1 if any file is unusable or "
         "no intent file is found.",
-        **example("casa library list data/processed/simulated/intents"),
+        **example("casa library list data/raw/simulated"),
     )
     listing.add_argument("library", metavar="DIR")
     listing.set_defaults(func=_library_list)

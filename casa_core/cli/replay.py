@@ -42,8 +42,7 @@ def register(commands) -> None:
         "named is always replayed. Exit 1 if a log is invalid, 2 on bad arguments. "
         "See docs/replay.md.",
         **example(
-            "casa replay data/raw/simulated --out data/processed/simulated/replay "
-            "--intents data/processed/simulated/intents",
+            "casa replay data/raw/simulated --out data/processed/simulated/replay",
             "casa replay data/raw/mine/p01/known_goal_NA.csv --arbitration confidence --out cf",
         ),
     )
@@ -76,7 +75,8 @@ def register(commands) -> None:
         "--intents",
         metavar="LIBRARY",
         help="learned intents: a *.intent.json or a folder of them (a subfolder named after "
-        "a trial's participant serves that participant's trials)",
+        "a trial's participant serves that participant's trials); default: the intents the "
+        "dataset keeps in the trial's participant folder (docs/replay.md)",
     )
     command.add_argument(
         "--scene",
@@ -172,7 +172,6 @@ def _collect(paths) -> tuple[list[dict], list, list[str]]:
 
 def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
     from casa_core.analysis.replay import (
-        library_files,
         replay_differences,
         replay_trial,
         trial_point,
@@ -210,7 +209,7 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
             point=point,
             lam=args.lam,
             epsilon=epsilon,
-            learned=library_files(args.intents, meta["participant"]),
+            learned=_learned(trial, args.intents, meta["participant"]),
         )
     except ValueError as error:  # ReplayError, LibraryError: the trial is left out, said why
         return {**row, "status": "skipped", "reason": f"{trial['file']}: {error}"}
@@ -226,6 +225,15 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
     differences = replay_differences(check.frame, replayed)
     row.update({f"max_diff_{key}": value for key, value in differences.items()})
     return {**row, "steps": int(replayed["t"].nunique()), "status": "replayed", "reason": ""}
+
+
+def _learned(trial: dict, intents: str | None, participant: str) -> list[Path]:
+    """``--intents`` when given, else the intents the dataset keeps for the trial."""
+    from casa_core.analysis.replay import kept_intent_files, library_files
+
+    if intents is not None:
+        return library_files(intents, participant)
+    return kept_intent_files(trial["file"], trial["root"])
 
 
 def _summarise(rows: list[dict], out: Path) -> int:

@@ -26,6 +26,7 @@ import pandas as pd
 
 from casa_core.io.contract import (
     CONDITION_KEYS,
+    INTENT_SUFFIX,
     SCENE_NAME,
     SINGLE_TRIAL_PHASES,
     SURVEYS_NAME,
@@ -41,8 +42,9 @@ class FileCheck:
     """The outcome of checking one file of a dataset.
 
     ``kind`` is ``"trial"`` (the ``.csv`` of a trial, with its ``.json``),
-    ``"surveys"``, ``"scene"`` (the dataset's ``scene.yaml``), ``"other"`` (not a log:
-    ignored), or, for a path given to
+    ``"surveys"``, ``"scene"`` (the dataset's ``scene.yaml``), ``"intent"`` (a learned
+    intent kept with the logs, ``*.intent.json``: read by the replay, not here),
+    ``"other"`` (not a log: ignored), or, for a path given to
     :func:`check_paths`, ``"folder"`` (without logs) or ``"missing"``. ``meta`` and
     ``frame`` hold what was parsed (typed as :func:`~casa_core.io.read_trial` /
     :func:`~casa_core.io.read_surveys` return it), so that a checked dataset need not
@@ -247,6 +249,8 @@ def _classify(path: Path, root: Path | None) -> str | FileCheck:
     if path.name.lower() == SURVEYS_NAME:
         message = f"Likert answers are read only from files named exactly {SURVEYS_NAME!r}"
         return FileCheck(path, "other", [Problem(name, "", "surveys-name", message)])
+    if path.name.endswith(INTENT_SUFFIX):
+        return FileCheck(path, "intent")
     if path.suffix in TRIAL_SUFFIXES:
         return "trial"
     if path.suffix.lower() in TRIAL_SUFFIXES:

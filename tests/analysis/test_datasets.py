@@ -208,3 +208,19 @@ def test_max_duration_must_be_a_positive_finite_number(value):
     problems = check_meta({**META, "max_duration": value}, "t.json")
     assert [(p.where, p.rule) for p in problems] == [("key 'max_duration'", "positive-number")]
     assert "positive number of seconds" in problems[0].message
+
+
+def test_learned_intents_kept_with_the_logs_are_listed_not_read_as_trials(tmp_path):
+    # The simulated study keeps p<N>/intents/<task>/NAME.intent.json beside the logs.
+    from casa_core.io import check_paths
+
+    write_dataset(tmp_path, participants=("p01",))
+    kept = tmp_path / "p01" / "intents" / "unknown_goal" / "learned_red.intent.json"
+    kept.parent.mkdir(parents=True)
+    kept.write_text("{}")
+    checks = check_paths([tmp_path])
+    assert [p for c in checks for p in c.problems] == []
+    assert [c.file for c in checks if c.kind == "intent"] == [kept]
+    table = datasets.validation_table(checks, tmp_path)
+    row = table[table["file"] == "p01/intents/unknown_goal/learned_red.intent.json"]
+    assert row[["kind", "status"]].values.tolist() == [["intent", "ignored"]]

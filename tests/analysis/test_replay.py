@@ -176,3 +176,41 @@ def test_differences_are_nan_where_the_log_has_no_column(dataset):
     replayed = replay_trial(meta, frame, SCENE)
     bare = frame[["t", "x", "y", "z", "rot", "keys"]]
     assert all(np.isnan(value) for value in replay_differences(bare, replayed).values())
+
+
+def test_a_dataset_replays_each_trial_with_the_intents_its_participant_folder_keeps(tmp_path):
+    # As `casa session` keeps them: p01/.session/library/learned_red.intent.json. p02 ran
+    # the same trial but keeps no intent: p01's must not serve it.
+    from casa_core.learning.library import load_intent
+    from casa_core.study.closed_loop import known_goal_intents, run_trial
+    from casa_core.study.key_sources import WaypointKeys
+    from tests.learning.test_library import make_intent, save
+
+    folder = tmp_path / "ds"
+    path = save(folder / "p01" / ".session" / "library", make_intent("learned_red"))
+    for participant in ("p01", "p02"):
+        intents = [*known_goal_intents(SCENE), load_intent(path).intent]
+        result = run_trial(
+            SCENE,
+            "unknown_goal",
+            "CASA",
+            WaypointKeys([[*SCENE.goals["red"], 0.0]]),
+            participant=participant,
+            intents=intents,
+            phase="after_learning",
+            max_duration=3.0,
+        )
+        result.write(folder / participant / "unknown_goal_CASA_after")
+    out = tmp_path / "out"
+    assert main(["replay", str(folder), "--out", str(out)]) == 0
+    rows = pd.read_csv(out / "replay.csv", keep_default_na=False).set_index("participant")
+    assert rows.loc["p01", "status"] == "replayed"
+    for column in ("max_diff_beta", "max_diff_belief", "max_diff_alpha"):
+        assert float(rows.loc["p01", column]) == 0.0
+    assert rows.loc["p02", "status"] == "skipped"
+    assert "'learned_red' is not a goal of the scene" in rows.loc["p02", "reason"]
+    # --intents replaces what the dataset keeps.
+    other = tmp_path / "other"
+    assert main(["replay", str(folder), "--out", str(other), "--intents", str(path)]) == 0
+    rows = pd.read_csv(other / "replay.csv", keep_default_na=False)
+    assert rows["status"].tolist() == ["replayed", "replayed"]

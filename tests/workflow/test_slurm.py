@@ -150,7 +150,7 @@ def test_the_slurm_profile_runs_the_dag_through_slurm_with_the_local_outputs(
     expected, produced = _outputs(local), _outputs(on_slurm)
     assert sorted(produced) == sorted(expected)
     assert [name for name in expected if produced[name] != expected[name]] == []
-    for part in ("p1/before/", "p1/after/", "intents/p1/", "case_study/steps.csv"):
+    for part in ("p1/before/", "p1/after/", "p1/intents/", "case_study/steps.csv"):
         assert any(part in name and name.endswith((".csv", ".json")) for name in expected), part
 
 

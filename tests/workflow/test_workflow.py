@@ -196,6 +196,38 @@ def test_default_target_builds_every_table_figure_and_the_report(repo):
         assert caption in html
 
 
+def test_without_simulate_the_simulated_study_is_left_as_it_is(repo):
+    # A simulated study already built: its logs and the marker the workflow writes.
+    simulated = repo / "data" / "raw" / "simulated"
+    write_dataset(simulated, participants=("p1",))
+    (simulated / ".complete").touch()
+    dry = snakemake(repo, "--dry-run", "--config", "simulate=false")
+    assert dry.returncode == 0, dry.stderr
+    assert "data/processed/pilot/trials.csv" in dry.stdout
+    for folder in ("data/processed/simulated", "figures/simulated", "data/raw/simulated/p"):
+        assert folder not in dry.stdout
+    assert "data/raw/simulated: the simulated study, left as it is" in dry.stderr
+
+
+def test_one_dataset_is_built_alone_by_naming_it(repo):
+    dry = snakemake(repo, "--dry-run", "--config", "datasets=[lab]")
+    assert dry.returncode == 0, dry.stderr
+    for output in (
+        "data/processed/lab/results.md",
+        "data/processed/lab/stats.md",
+        "figures/lab/objective.png",
+        "data/processed/lab/replay",
+    ):
+        assert output in dry.stdout, output
+    # Nothing else: no other dataset, no simulation, no case study, no variants.
+    for other in ("data/processed/pilot", "simulated_participant", "case_study", "robustness"):
+        assert other not in dry.stdout, other
+    wrong = snakemake(repo, "--dry-run", "--config", "datasets=[nowhere]")
+    assert wrong.returncode != 0
+    said = wrong.stdout + wrong.stderr
+    assert "datasets: nowhere is not a dataset (found: lab, pilot, simulated)" in said
+
+
 def test_a_dataset_missing_conditions_and_surveys_still_gets_stats_and_figures(repo):
     result = snakemake(repo, "figures/lab/objective.png")
     assert result.returncode == 0, result.stdout[-3000:]

@@ -11,6 +11,7 @@ from casa_core.experiments import power as casa_power
 from casa_core.experiments import robustness as casa_variants
 from casa_core import vocabulary
 from casa_core.io.atomic import atomic_write_text
+from casa_core.io.contract import INTENT_SUFFIX
 
 
 def config_layers():
@@ -65,14 +66,26 @@ RESERVED = ("case_study", "robustness", "power")
 # The tasks whose intents the simulated participants teach (workflow/rules/study.smk).
 UNKNOWN_TASKS = vocabulary.UNKNOWN_TASKS
 # Datasets that rules of this workflow write into data/raw (the simulated study).
-GENERATED = ("simulated",) if SIMULATE else ()
+SIMULATED_NAME = "simulated"
+GENERATED = (SIMULATED_NAME,) if SIMULATE else ()
 
 
 def discover_datasets():
-    """The folders of data/raw (hidden ones skipped), plus the datasets rules generate."""
+    """The folders of data/raw (hidden ones skipped), plus the datasets rules generate.
+
+    Without `simulate`, data/raw/simulated is not a dataset: the simulated study's logs
+    and outputs are left as they are, not rebuilt as an ordinary dataset's.
+    """
     found = set(GENERATED)
     if RAW.is_dir():
         found |= {p.name for p in RAW.iterdir() if p.is_dir() and not p.name.startswith(".")}
+    if not SIMULATE and SIMULATED_NAME in found:
+        found.discard(SIMULATED_NAME)
+        print(
+            f"data/raw/{SIMULATED_NAME}: the simulated study, left as it is with its outputs "
+            "(simulate=false)",
+            file=sys.stderr,
+        )
     for name in sorted(found):
         if not DATASET_NAME.fullmatch(name) or name in RESERVED:
             raise ValueError(
@@ -82,7 +95,23 @@ def discover_datasets():
     return sorted(found)
 
 
+def chosen_datasets():
+    """The datasets of the default target: config `datasets`, else every one."""
+    unknown = [name for name in config["datasets"] if name not in DATASETS]
+    if unknown:
+        raise ValueError(
+            f"datasets: {', '.join(unknown)} is not a dataset (found: "
+            f"{', '.join(DATASETS) or 'none'}); name folders of data/raw"
+            + ("" if SIMULATE else f", or set simulate=true for {SIMULATED_NAME}")
+        )
+    return list(config["datasets"]) or DATASETS
+
+
 DATASETS = discover_datasets()
+# The default target: the chosen datasets, and only when none is chosen the case study
+# and the robustness target too.
+TARGET_DATASETS = chosen_datasets()
+WHOLE_BUILD = not config["datasets"]
 
 
 wildcard_constraints:
@@ -90,13 +119,15 @@ wildcard_constraints:
 
 
 def raw_files(wildcards):
-    """Every non-hidden file of a dataset, so that a changed or added log reruns it."""
+    """Every non-hidden file of a dataset and its learned intents (also in hidden folders:
+    .session/library/), so that a changed or added log or intent reruns it."""
     if wildcards.ds in GENERATED:
         return [RAW / wildcards.ds / ".complete"]
     files = []
     for path in sorted((RAW / wildcards.ds).rglob("*")):
         parts = path.relative_to(RAW).parts
-        if path.is_file() and not any(part.startswith(".") for part in parts):
+        hidden = any(part.startswith(".") for part in parts)
+        if path.is_file() and (not hidden or path.name.endswith(INTENT_SUFFIX)):
             files.append(str(path))
     return files
 
@@ -105,13 +136,6 @@ def dataset_scene(wildcards):
     """A dataset's own scene.yaml (an imported dataset carries its layout), else config's."""
     own = RAW / wildcards.ds / "scene.yaml"
     return str(own) if own.is_file() else config["scene"]
-
-
-def replay_intents(wildcards):
-    """The learned intents a replay of a generated dataset needs (workflow/rules/study.smk)."""
-    if wildcards.ds not in GENERATED:
-        return []
-    return expand(INTENTS / "p{p}" / "{task}", p=PARTICIPANTS, task=UNKNOWN_TASKS)
 
 
 def has_surveys(ds):
@@ -142,9 +166,9 @@ def dataset_outputs(ds):
 
 
 def all_outputs():
-    outputs = [out for ds in DATASETS for out in dataset_outputs(ds)]
+    outputs = [out for ds in TARGET_DATASETS for out in dataset_outputs(ds)]
     outputs.append(str(FIGURES / "scene.png"))
-    if CASE_STUDY:
+    if CASE_STUDY and WHOLE_BUILD:
         outputs += [str(PROCESSED / "case_study" / f) for f in ("steps.csv", "arbitration.csv")]
         outputs += [
             str(FIGURES / f"{f}.{e}") for f in ("case_study", "arbitration") for e in ("pdf", "png")
@@ -159,10 +183,10 @@ REPORT_TABLES = ("trials", "validation")
 
 
 def report_pages():
-    pages = [str(PROCESSED / ds / "summary.md") for ds in DATASETS]
+    pages = [str(PROCESSED / ds / "summary.md") for ds in TARGET_DATASETS]
     names = ("results", "summary", "stats", *REPORT_TABLES)
-    pages += [str(REPORT / ds / f"{name}.html") for ds in DATASETS for name in names]
-    if SIMULATE:
+    pages += [str(REPORT / ds / f"{name}.html") for ds in TARGET_DATASETS for name in names]
+    if SIMULATE and SIMULATED_NAME in TARGET_DATASETS:
         pages.append(str(REPORT / "simulated" / "learning.html"))
     return pages
 

@@ -1,13 +1,13 @@
 # Per dataset: replay the inference of its assisted trials (PBA and CASA) with each
 # trial's own settings (casa replay, docs/replay.md): one table and one figure per
 # trial, and replay.csv with the largest difference from each log's beta, belief and
-# alpha. The simulated study's learned intents are passed from its library.
+# alpha. After-learning trials run with the intents the dataset keeps in each
+# participant's folder (casa replay --intents unset: docs/replay.md).
 
 
 rule replay:
     input:
         raw_files,
-        replay_intents,
         validation=PROCESSED / "{ds}" / "validation.csv",
         scene=dataset_scene,
     output:
@@ -19,8 +19,7 @@ rule replay:
         "../envs/casa.yaml"
     params:
         raw=lambda wildcards: RAW / wildcards.ds,
-        intents=lambda wildcards: f"--intents {INTENTS}" if wildcards.ds in GENERATED else "",
         allow_invalid=allow_invalid_flag,
     shell:
         "exec casa replay {params.raw} --out {output.tables} --figures {output.figures} "
-        "--scene {input.scene} {params.intents} {params.allow_invalid} > {log} 2>&1"
+        "--scene {input.scene} {params.allow_invalid} > {log} 2>&1"

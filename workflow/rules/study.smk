@@ -1,10 +1,11 @@
 # The simulated study (paper, Sec. V), learning, and the expert case study (Sec. IV).
 # One job per participant (its whole protocol), so that --cores 2 keeps both busy.
-# The simulated study is the dataset data/raw/simulated; .complete marks it done.
+# The simulated study is the dataset data/raw/simulated; .complete marks it done. Each
+# participant's learned intents are kept in its folder (p<N>/intents/<task>/), as a
+# dataset keeps the intents its trials ran with (docs/data-contracts.md).
 
 PARTICIPANTS = list(range(1, config["simulation"]["participants"] + 1))
-SIMULATED = RAW / "simulated"
-INTENTS = PROCESSED / "simulated" / "intents"
+SIMULATED = RAW / SIMULATED_NAME
 
 
 wildcard_constraints:
@@ -23,7 +24,9 @@ rule simulated_participant:
         before=directory(SIMULATED / "p{p}" / "before"),
         after=directory(SIMULATED / "p{p}" / "after"),
         libraries=directory(
-            expand(INTENTS / "p{p}" / "{task}", task=UNKNOWN_TASKS, allow_missing=True)
+            expand(
+                SIMULATED / "p{p}" / "intents" / "{task}", task=UNKNOWN_TASKS, allow_missing=True
+            )
         ),
         rows=expand(
             PROCESSED / "simulated" / "learning" / "p{p}_{task}.csv",
