@@ -7,6 +7,7 @@ from pathlib import Path
 
 from casa_core.cli._errors import cannot_write
 from casa_core.cli._options import example
+from casa_core.cli._workflow import add_config_option, load_workflow_config
 from casa_core.io import read_table
 
 
@@ -16,7 +17,11 @@ def register(commands) -> None:
         "stats",
         help="the study's statistics (H1-H4): stats.csv and an APA-style Markdown report",
         description="Run the study's analyses on trials.csv (and likert.csv) and write "
-        "stats.csv and its APA-style rendering.",
+        "stats.csv and its APA-style rendering, with the non-inferiority margins of the "
+        "config's statistics unless --margin or --margin-fraction is given: the tables the "
+        "workflow writes. The workflow also writes summary.md and results.md (casa report); "
+        "to build one dataset as the workflow does: snakemake --cores all --config "
+        "'datasets=[NAME]'.",
         **example(
             "casa stats --trials data/processed/mine/trials.csv "
             "--likert data/processed/mine/likert.csv \\",
@@ -32,8 +37,8 @@ def register(commands) -> None:
         action="append",
         default=[],
         metavar="[TASK:]METRIC=VALUE",
-        help="a non-inferiority margin in the metric's unit (repeatable; the workflow "
-        "passes the config's statistics.noninferiority_margins)",
+        help="a non-inferiority margin in the metric's unit (repeatable; with "
+        "--margin-fraction, replaces the config's statistics.noninferiority_margins)",
     )
     command.add_argument(
         "--margin-fraction",
@@ -41,8 +46,9 @@ def register(commands) -> None:
         default=[],
         metavar="[TASK:]METRIC=VALUE",
         help="a margin as a fraction of the reference condition's mean (repeatable; "
-        "statistics.noninferiority_fractions)",
+        "replaces statistics.noninferiority_fractions)",
     )
+    add_config_option(command)
     command.set_defaults(func=_stats)
 
 
@@ -58,7 +64,9 @@ def _stats(args) -> int:
                 parse_margin(text, "--margin-fraction") for text in args.margin_fraction
             ),
         )
-    except ValueError as error:
+        if not args.margin and not args.margin_fraction:
+            margins = Margins.from_config(load_workflow_config(args)[0]["statistics"])
+    except ValueError as error:  # ConfigError and SceneError too: they name file and key
         print(f"casa stats: {error}", file=sys.stderr)
         return 2
     try:

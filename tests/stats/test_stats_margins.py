@@ -100,3 +100,23 @@ def test_cli_margins(tmp_path, known, capsys):
     assert rows.loc[rows["metric"] == "error", "noninferior"].notna().all()
     assert cli.main(base + ["--margin", "error=-2"]) == 2
     assert "--margin 'error=-2': a margin must be a positive number" in capsys.readouterr().err
+
+
+def test_cli_without_margin_options_takes_the_configs_as_the_workflow_does(tmp_path, known):
+    # `casa stats` as its --help shows it: the same margins as the workflow's stats.csv,
+    # those of the config (default: the package's).
+    from casa_core.config import DEFAULT_CONFIG
+
+    known.to_csv(tmp_path / "trials.csv", index=False)
+    by_hand, workflow = tmp_path / "hand.csv", tmp_path / "workflow.csv"
+    base = ["stats", "--trials", str(tmp_path / "trials.csv"), "--out-md", str(tmp_path / "s.md")]
+    assert cli.main([*base, "--out-csv", str(by_hand)]) == 0
+    options = Margins.from_config(load_config(DEFAULT_CONFIG)["statistics"]).options()
+    assert cli.main([*base, "--out-csv", str(workflow), *" ".join(options).split()]) == 0
+    assert by_hand.read_bytes() == workflow.read_bytes()
+    written = pd.read_csv(by_hand, keep_default_na=False, na_values=[""])
+    # The config gives margins for these three; effort (key-ticks) has none.
+    metrics = ["error", "efficiency", "relative_effort"]
+    rows = written[(written["analysis"] == "noninferiority") & written["estimate"].notna()]
+    assert set(rows["metric"]) > set(metrics)
+    assert rows.loc[rows["metric"].isin(metrics), "margin"].notna().all()

@@ -82,8 +82,10 @@ rule robustness_stats:
         "../envs/casa.yaml"
     params:
         margins=margin_options,
+        config=CONFIG_FILE,
     shell:
         "exec casa stats --trials {input.trials} --likert {input.likert} {params.margins} "
+        "--config {params.config} "
         "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"
 
 

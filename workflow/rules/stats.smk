@@ -19,6 +19,10 @@ rule stats:
     params:
         likert=likert_option,
         margins=margin_options,
+        # Read for the margins only when the config has none (casa stats would take the
+        # package's otherwise).
+        config=CONFIG_FILE,
     shell:
         "exec casa stats --trials {input.trials} {params.likert} {params.margins} "
+        "--config {params.config} "
         "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"
