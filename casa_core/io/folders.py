@@ -385,7 +385,8 @@ def validate_paths(paths: Iterable[Path | str]) -> list[Problem]:
     --------
     >>> import tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
-    >>> _ = (folder / "t.csv").write_text("t,x,y,z,rot,keys\\n0,0.45,-0.22,0.38,0,\\n")
+    >>> rows = "0,0.45,-0.22,0.38,0,\\n0.05,0.45,-0.22,0.38,0,\\n"
+    >>> _ = (folder / "t.csv").write_text("t,x,y,z,rot,keys\\n" + rows)
     >>> [str(p).replace(str(folder), "DIR") for p in validate_paths([folder])]
     ['DIR/t.json: [pair] missing: a trial needs .json and .csv']
     """

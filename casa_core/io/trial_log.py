@@ -189,10 +189,11 @@ def load_trial(
     --------
     >>> import tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
-    >>> _ = (folder / "t.csv").write_text("t,x,y,z,rot,keys\\n0,0.45,-0.22,0.38,0,\\n")
+    >>> rows = "0,0.45,-0.22,0.38,0,\\n0.05,0.45,-0.22,0.38,0,\\n"
+    >>> _ = (folder / "t.csv").write_text("t,x,y,z,rot,keys\\n" + rows)
     >>> meta, frame, problems = load_trial(folder / "t")
     >>> meta, len(frame), [p.rule for p in problems]
-    (None, 1, ['pair'])
+    (None, 2, ['pair'])
     """
     json_path, csv_path = trial_files(path)
     meta, problems = load_meta(json_path, root=root)
@@ -330,8 +331,8 @@ def write_trial(stem: Path | str, meta: dict, frame: pd.DataFrame) -> tuple[dict
     >>> import tempfile, pandas as pd
     >>> meta = {"participant": "p01", "task": "known_goal", "method": "NA",
     ...         "phase": "demonstration", "source": "human"}
-    >>> frame = pd.DataFrame({"t": [0.0], "x": [0.45], "y": [-0.22], "z": [0.38],
-    ...                       "rot": [0.0], "keys": [None]})
+    >>> frame = pd.DataFrame({"t": [0.0, 0.05], "x": [0.45, 0.45], "y": [-0.22, -0.22],
+    ...                       "z": [0.38, 0.38], "rot": [0.0, 0.0], "keys": [None, None]})
     >>> try:
     ...     write_trial(f"{tempfile.mkdtemp()}/t", meta, frame)
     ... except LogError as error:

@@ -173,6 +173,10 @@ def parse_trial_csv(
     )
     if len(cells) == 0:
         problems.append(Problem(file, "", "non-empty", "no rows; expected one row per tick"))
+    elif len(cells) == 1:
+        # One tick has no motion and no duration: every metric of the trial is undefined.
+        message = "one row; a trial needs at least two ticks (its start and its end)"
+        problems.append(Problem(file, "", "two-rows", message))
     if not problems:
         valid = _valid_frame(cells, meta)
         if valid is not None:

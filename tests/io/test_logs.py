@@ -146,6 +146,8 @@ FRAME_CASES = [
     (lambda f: f.assign(speed=1.0), "column 'speed'", "unknown-column"),
     (lambda f: f.assign(**{"beta:red": 1.0}), "column 'beta:red'", "intent-name"),
     (lambda f: f.iloc[:0], "", "non-empty"),
+    # One tick: no duration, no motion (every metric undefined).
+    (lambda f: f.iloc[:1], "", "two-rows"),
 ]
 
 
