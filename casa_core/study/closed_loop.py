@@ -252,7 +252,8 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
         rows.append(row)
         if on_tick is not None:
             on_tick(t, state, held, alpha)
-        if getattr(source, "done", False):
+        # A trial ended at once still has its start and one tick (the log's two-rows rule).
+        if tick > 0 and getattr(source, "done", False):
             break
         user_action = keys_to_action(held, teleop.speed, teleop.rot_speed)
         elapsed = (tick % ticks_per_inference) * dt

@@ -148,3 +148,13 @@ def test_bad_inputs_are_named(scene):
     odd_tick = dataclasses.replace(scene, teleop=dataclasses.replace(scene.teleop, dt=0.3))
     with pytest.raises(ValueError, match="teleop.dt"):
         run_trial(odd_tick, "known_goal", "NA", ScriptedKeys([]), participant="s")
+
+
+def test_a_trial_ended_at_once_still_writes_a_valid_log(scene, tmp_path):
+    # A participant who ends the trial on its first tick: the log keeps the start and one
+    # tick, which the contract requires (rule two-rows), so the session goes on.
+    result = run_trial(scene, "known_goal", "CASA", ScriptedKeys([]), participant="s1")
+    stem = tmp_path / "s1" / "known_goal_CASA"
+    result.write(stem)
+    assert validate_paths([tmp_path]) == []
+    assert read_trial(stem)[1]["t"].tolist() == [0.0, 0.05]
