@@ -18,6 +18,8 @@ Examples
 >>> config = load_config(DEFAULT_CONFIG, folder / "overlay.yaml")
 >>> config["simulation"]["participants"], config["simulation"]["seed"]
 (3, 2021)
+>>> load_config() == load_config(DEFAULT_CONFIG) | {"scene": None}  # no file: the defaults
+True
 >>> _ = (folder / "typo.yaml").write_text("simulation: {max_duraton: 20}\\n")
 >>> load_config(DEFAULT_CONFIG, folder / "typo.yaml")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
@@ -46,6 +48,8 @@ if TYPE_CHECKING:
 SCHEMA_PATH = Path(__file__).with_name("config.schema.yaml")
 #: The study's config, ``config/config.yaml`` of the repository.
 DEFAULT_CONFIG = Path(__file__).resolve().parents[1] / "config" / "config.yaml"
+#: What errors call the config when no file is given: the schema's defaults alone.
+PACKAGE_DEFAULTS = "the package's defaults"
 #: Where ``--config KEY=VALUE`` overrides are said to come from in errors.
 OVERRIDES = "--config"
 #: The variant that overlays nothing: the study's config as it is.
@@ -84,7 +88,9 @@ def load_config(*paths: Path | str, overrides: Mapping | None = None) -> dict:
     *paths : path-like
         YAML files, each a mapping; a later file overrides an earlier one key by key
         (nested mappings are merged, other values replaced). Relative paths resolve
-        against the working directory.
+        against the working directory. None: the package's defaults, the schema's,
+        which are the repository's ``config/config.yaml`` (its ``scene`` aside: null,
+        the package's own scene), so that a command works from any folder.
     overrides : mapping, optional
         Applied last, like ``snakemake --config``; strings given for a boolean, integer
         or number key are converted (``"true"``, ``"3"``, ``"0.5"``).
@@ -101,8 +107,6 @@ def load_config(*paths: Path | str, overrides: Mapping | None = None) -> dict:
         file, an unknown key, a value of the wrong type or out of range, a missing
         required key.
     """
-    if not paths and not overrides:
-        raise ConfigError("no config given")
     merged: dict = {}
     sources = []
     layers = [(str(path), _read(Path(path))) for path in paths]
@@ -112,7 +116,7 @@ def load_config(*paths: Path | str, overrides: Mapping | None = None) -> dict:
         _raise(source, _problems(layer, partial=True))
         merge(merged, layer)
         sources.append(source)
-    return validate_config(merged, source=" + ".join(sources))
+    return validate_config(merged, source=" + ".join(sources) or PACKAGE_DEFAULTS)
 
 
 def validate_config(data: Any, source: str = "config") -> dict:
@@ -122,11 +126,10 @@ def validate_config(data: Any, source: str = "config") -> dict:
 
     Examples
     --------
-    >>> validate_config({"scene": "s.yaml"}, source="mine.yaml")
+    >>> validate_config({"simulation": {"participants": 0}}, source="mine.yaml")
     Traceback (most recent call last):
     ...
-    casa_core.config.ConfigError: mine.yaml: simulation: missing (required)
-    mine.yaml: case_study: missing (required)
+    casa_core.config.ConfigError: mine.yaml: simulation.participants: must be >= 1, got 0
     """
     config = _plain(data)
     _raise(source, _problems(config, partial=False))

@@ -19,9 +19,11 @@ from casa_core.config import (
     ConfigError,
     default,
     load_config,
+    merge,
     schema,
     validate_config,
 )
+from casa_core.scene import DEFAULT_SCENE, load_scene
 from tests.io.test_logs_synthetic import ROOT, write_dataset
 from tests.workflow.test_workflow import ENV, copy_workflow, snakemake
 
@@ -160,17 +162,37 @@ def test_a_bad_overlay_is_refused_naming_the_file_and_the_key(tmp_path, overlay,
 
 
 def test_a_missing_required_key_is_named(tmp_path):
+    # Every section has its defaults; a parameter given as a mapping needs all of its keys.
     data = yaml.safe_load(CONFIG.read_text())
-    del data["simulation"]["participants"]
-    del data["case_study"]["seed"]
+    population = data["simulation"]["population"]
+    del population["reaction_time"]["sigma"]
+    del population["max_keys"]["p"]
     path = tmp_path / "partial.yaml"
     path.write_text(yaml.safe_dump(data))
     with pytest.raises(ConfigError) as error:
         load_config(path)
+    where = f"{path}: simulation.population"
     assert str(error.value).splitlines() == [
-        f"{path}: case_study.seed: missing (required)",
-        f"{path}: simulation.participants: missing (required)",
+        f"{where}.max_keys.p: missing (required)",
+        f"{where}.reaction_time.sigma: missing (required)",
     ]
+
+
+def test_no_file_gives_the_repositorys_config_from_any_folder(tmp_path, monkeypatch):
+    # The commands fall back on the schema's defaults when no --config is given: they must
+    # be the study's settings, config/config.yaml's, or the two would drift apart.
+    monkeypatch.chdir(tmp_path)
+    package = load_config()
+    study = load_config(CONFIG)
+    assert {**package, "scene": study["scene"]} == study
+    # The scene: null, the package's own, the file config/config.yaml names.
+    assert package["scene"] is None
+    assert load_scene(package["scene"]) == load_scene(ROOT / study["scene"])
+    assert (ROOT / study["scene"]).resolve() == DEFAULT_SCENE
+    # Overrides alone apply over the defaults.
+    assert load_config(overrides={"simulation": {"participants": "3"}}) == merge(
+        load_config(), {"simulation": {"participants": 3}}
+    )
 
 
 def test_command_line_strings_become_the_schemas_types():

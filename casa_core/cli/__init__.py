@@ -51,7 +51,7 @@ from casa_core.cli import (
     teleop,
     validate,
 )
-from casa_core.cli._options import ExampleFormatter, example
+from casa_core.cli._options import CommandParser, ExampleFormatter, example
 
 #: Examples of the commands whose module gives none, by their ``prog``.
 EXAMPLES = {
@@ -75,7 +75,7 @@ EXAMPLES = {
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = CommandParser(
         prog="casa",
         description="Confidence-Aware Shared Autonomy: simulation, study and analysis tools. "
         "Each command's --help ends with an example.",

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import math
+from pathlib import Path
 
 
 def scene_option(command) -> None:
@@ -11,6 +13,89 @@ def scene_option(command) -> None:
     command.add_argument(
         "--scene", metavar="YAML", help="scene file (default: the package's config/scene.yaml)"
     )
+
+
+def dataset_scene_option(command, folder: str) -> None:
+    """``--scene YAML`` of a command on a dataset ``folder`` (its metavar): see
+    :func:`dataset_scene`."""
+    from casa_core.io.contract import SCENE_NAME
+
+    command.add_argument(
+        "--scene",
+        metavar="YAML",
+        help=f"scene file (default: {folder}/{SCENE_NAME} if the dataset has one, as an "
+        "imported dataset does, else the package's config/scene.yaml)",
+    )
+
+
+def dataset_scene(folder, given: str | None) -> Path | None:
+    """The scene file of a command on a dataset: ``given``, else the dataset's own, else None.
+
+    None is the package's scene (:func:`casa_core.scene.load_scene`'s default), so
+    that the command works from any folder, as the workflow builds a dataset.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> dataset_scene(folder, None), dataset_scene(folder, "mine.yaml")
+    (None, PosixPath('mine.yaml'))
+    >>> _ = (folder / "scene.yaml").write_text("{}")
+    >>> dataset_scene(folder, None) == folder / "scene.yaml"
+    True
+    """
+    from casa_core.io.contract import SCENE_NAME
+
+    if given:
+        return Path(given)
+    own = Path(folder) / SCENE_NAME
+    return own if own.is_file() else None
+
+
+class CommandParser(argparse.ArgumentParser):
+    """A parser that refuses an unknown argument itself, with its usage and the closest option.
+
+    argparse leaves a subcommand's unknown arguments to the top-level parser, which
+    prints its own usage (``casa [-h] ...``) and no hint; here the subcommand's parser,
+    the one that knows the options, says it. Subcommands take the class of their parent.
+
+    Examples
+    --------
+    >>> parser = CommandParser(prog="casa validate")
+    >>> _ = parser.add_argument("--allow-invalid", action="store_true")
+    >>> parser.unknown(["--alow-invalid", "x"])
+    'unrecognized arguments: --alow-invalid (did you mean --allow-invalid?), x'
+    """
+
+    def parse_known_args(self, args=None, namespace=None):
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:
+            self.error(self.unknown(extras))  # exit status 2, this command's usage
+        return namespace, extras
+
+    def unknown(self, extras: list[str]) -> str:
+        """The message for arguments no option of this parser takes."""
+        options = [name for action in self._actions for name in action.option_strings]
+        named = []
+        for extra in extras:
+            close = difflib.get_close_matches(extra.split("=", 1)[0], options, n=1)
+            hint = f" (did you mean {close[0]}?)" if extra.startswith("-") and close else ""
+            named.append(extra + hint)
+        return f"unrecognized arguments: {', '.join(named)}"
+
+
+def counted(parts: list[tuple[int, str]]) -> str:
+    """What a command's summary line counts, each count named, those of 0 left out.
+
+    Examples
+    --------
+    >>> counted([(253, "trial(s)"), (0, "scene file(s)"), (11, "survey file(s)")])
+    '253 trial(s) and 11 survey file(s)'
+    >>> counted([(0, "trial(s)"), (0, "survey file(s)")])
+    '0 trial(s)'
+    """
+    named = [f"{count} {word}" for count, word in parts if count] or [f"0 {parts[0][1]}"]
+    return " and ".join([", ".join(named[:-1]), named[-1]] if len(named) > 1 else named)
 
 
 class ExampleFormatter(argparse.RawDescriptionHelpFormatter):

@@ -35,7 +35,7 @@ def _bench(args) -> int:
     import torch
 
     from casa_core.bench import suite as bench
-    from casa_core.config import DEFAULT_CONFIG, load_config
+    from casa_core.config import load_config
     from casa_core.scene import load_scene
 
     scene = load_scene(args.scene)  # a SceneError is reported by casa_core.cli.main
@@ -43,7 +43,7 @@ def _bench(args) -> int:
     results = bench.run_benchmarks(
         scene,
         seed=args.seed,
-        config=load_config(DEFAULT_CONFIG) if args.participants else None,
+        config=load_config() if args.participants else None,  # the package's defaults
         participants=tuple(range(args.participants)),
     )
     print(bench.format_table(results))

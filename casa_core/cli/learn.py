@@ -45,7 +45,7 @@ def register(commands) -> None:
 
 def _learn(args) -> int:
     from casa_core.io import LogError
-    from casa_core.learning import IRLConfig
+    from casa_core.learning import IRLConfig, kept_record, stop_reason
     from casa_core.scene import load_scene
     from casa_core.study.learn_from_logs import learn_to_library
     from casa_core.study.learning_evidence import scene_objects
@@ -68,10 +68,12 @@ def _learn(args) -> int:
     except (OSError, ValueError, LogError) as error:
         print(f"casa learn: {error}", file=sys.stderr)
         return 1
-    last = history[-1]
+    # The words of casa library list: why training stopped, and the intent the file keeps.
+    kept = kept_record(history) or history[-1]
+    match = kept.get("verified_match")
+    ends = "" if match is None else f" (end_match_m={match:.4f})"
     print(
         f"casa learn: {args.name}: {len(history)} iterations in {seconds:.1f} s, "
-        f"converged={'yes' if last.get('converged') else 'no'}, "
-        f"D^phi ends {last['end_distance_m'] * 100:.1f} cm from the demos' -> {path}"
+        f"stopped={stop_reason(history)}; kept iteration {kept['iteration']}{ends} -> {path}"
     )
     return 0

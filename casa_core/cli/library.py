@@ -22,7 +22,16 @@ def register(commands) -> None:
         description="Print one line per intent file of DIR; if DIR holds none, of every "
         "library below it (e.g. one folder per participant), with its folder. Report each "
         "unusable file on stderr with the rule it breaks; exit 1 if any file is unusable or "
-        "no intent file is found.",
+        "no intent file is found. Each line: name, task, participant, seed, demonstrations; "
+        "iterations run of the most (IRLConfig.max_iterations); stopped, converged if IRL's "
+        "convergence criterion held at its last iteration (its cost gap, the movement and "
+        "the end of its own trajectories all below tolerance), else budget: it ran all its "
+        "iterations, as it usually does, which says nothing bad of the intent; kept, the "
+        "iteration whose weights the file holds, chosen by planning; end_match_m, how far "
+        "that intent's own optimum ends from the demonstrations' mean end (m, plus 0.1 m "
+        "per radian of rot). What tells a good intent is where its optimum ends "
+        "(the simulated study's learning.csv: endpoint_error_m, final_tilt_deg); "
+        "docs/data-contracts.md, Intent library.",
         **example("casa library list data/raw/simulated"),
     )
     listing.add_argument("library", metavar="DIR")

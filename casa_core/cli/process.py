@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from casa_core.cli._errors import cannot_write
-from casa_core.cli._options import example
+from casa_core.cli._options import dataset_scene, dataset_scene_option, example
 
 
 def register(commands) -> None:
@@ -15,11 +15,11 @@ def register(commands) -> None:
         help="turn one raw dataset folder into trials.csv, steps.csv and likert.csv",
         description="Read the trial logs and surveys below RAW_DIR and write trials.csv, "
         "steps.csv and likert.csv into --out; exit 1 if a file is bad (see casa validate).",
-        **example("casa process data/raw/mine --out data/processed/mine --scene config/scene.yaml"),
+        **example("casa process data/raw/mine --out data/processed/mine"),
     )
     command.add_argument("raw", metavar="RAW_DIR", help="the dataset folder, e.g. data/raw/mine")
     command.add_argument("--out", required=True, metavar="DIR", help="folder of the tables")
-    command.add_argument("--scene", required=True, metavar="YAML", help="config/scene.yaml")
+    dataset_scene_option(command, "RAW_DIR")
     command.add_argument("--dataset", help="dataset name in the tables (default: folder name)")
     command.add_argument(
         "--allow-invalid", action="store_true", help="exclude bad files instead of failing"
@@ -32,7 +32,7 @@ def _process(args) -> int:
     from casa_core.scene import SceneError, load_scene
 
     try:
-        scene = load_scene(args.scene)
+        scene = load_scene(dataset_scene(args.raw, args.scene))
     except SceneError as error:
         print(f"casa process: {error}", file=sys.stderr)
         return 1

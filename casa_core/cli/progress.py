@@ -10,14 +10,16 @@ EXAMPLE = ("casa progress power --config data/interim/config.yaml",)
 
 def register(commands) -> None:
     """Add ``casa progress`` to the ``casa`` subcommands."""
-    from casa_core.experiments.progress import BENCHMARKS, UNIT_WORDS
+    from casa_core.experiments.progress import BENCHMARKS, INTERIM, UNIT_WORDS
 
     command = commands.add_parser(
         "progress",
         help="how far the power or robustness target has come, and the time left",
         description="Units done of the total (power replicates, robustness variants), "
         "job time per unit and the time left at the pace so far, from the jobs' "
-        "Snakemake benchmark files.",
+        f"Snakemake benchmark files. Run it in the workflow's folder, or give --benchmarks: "
+        f"the workflow's {BENCHMARKS} folder, beside whose {INTERIM} the units' configs are "
+        "read; exit 2 if that folder does not exist.",
         **example(*EXAMPLE),
     )
     command.add_argument("target", choices=list(UNIT_WORDS))
@@ -32,7 +34,8 @@ def register(commands) -> None:
         "--benchmarks",
         default=str(BENCHMARKS),
         metavar="DIR",
-        help=f"the benchmark folder (default {BENCHMARKS}); the target's files are below it",
+        help=f"the workflow's benchmark folder (default {BENCHMARKS}, in the working "
+        "directory); the target's files are below it",
     )
     command.add_argument("--done", metavar="UNIT", help="name the unit that just finished")
     command.add_argument("--out", metavar="TXT", help="also write the line to this file")
@@ -44,14 +47,25 @@ def _progress(args) -> int:
     from datetime import UTC, datetime
     from pathlib import Path
 
+    from casa_core.cli._errors import fail
     from casa_core.config import load_config
     from casa_core.experiments.progress import read_progress, target_units, unit_configs
     from casa_core.io.atomic import atomic_write_text
 
     config = load_config(*args.config)
     units = target_units(config, args.target)
-    root = Path(args.benchmarks) / args.target
-    done = read_progress(root, units, configs=unit_configs(args.target, units))
+    benchmarks = Path(args.benchmarks)
+    if not benchmarks.is_dir():
+        # Counting nothing would print "0 done" for a run that may be far along elsewhere.
+        return fail(
+            "progress",
+            f"no benchmark folder {benchmarks.absolute()}: run casa progress in the "
+            "workflow's folder, or give --benchmarks WORKFLOW/benchmarks (no job of the "
+            "workflow has finished yet if it is the workflow's folder)",
+        )
+    # The units' configs are the workflow's, beside its benchmark folder.
+    configs = unit_configs(args.target, units, benchmarks.absolute().parent)
+    done = read_progress(benchmarks / args.target, units, configs=configs)
     line = done.line(args.target)
     if args.done:
         line = f"{line} (just done: {args.done})"

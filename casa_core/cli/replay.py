@@ -43,7 +43,8 @@ def register(commands) -> None:
         "See docs/replay.md.",
         **example(
             "casa replay data/raw/simulated --out data/processed/simulated/replay",
-            "casa replay data/raw/mine/p01/known_goal_NA.csv --arbitration confidence --out cf",
+            "casa replay data/raw/simulated/p1/before/known_goal_no_misspecification_NA.csv \\",
+            "    --arbitration confidence --out cf",
         ),
     )
     command.add_argument(

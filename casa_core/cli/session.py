@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 
 from casa_core.cli._options import example, scene_option
+from casa_core.cli._workflow import add_config_option
 
 
 def register(commands) -> None:
@@ -28,13 +29,10 @@ def register(commands) -> None:
     command.add_argument(
         "--out", required=True, metavar="DIR", help="the dataset's folder, e.g. data/raw/mylab"
     )
-    command.add_argument(
-        "--config",
-        action="append",
-        metavar="YAML",
-        help="workflow config whose session, simulation (demonstrations, demonstrations_when, "
-        "epsilon, seed) and inference blocks are used (default: the package's "
-        "config/config.yaml); repeat to overlay files in order",
+    add_config_option(
+        command,
+        "workflow config whose session, simulation (demonstrations, demonstrations_when, "
+        "epsilon, seed) and inference blocks are used",
     )
     scene_option(command)
     command.set_defaults(func=_session)
@@ -45,7 +43,7 @@ def _session(args) -> int:
 
     import torch
 
-    from casa_core.config import DEFAULT_CONFIG, load_config
+    from casa_core.config import load_config
     from casa_core.io import LogError
     from casa_core.scene import DEFAULT_SCENE, load_scene
     from casa_core.study.session import SessionSettings
@@ -53,8 +51,8 @@ def _session(args) -> int:
 
     torch.set_num_threads(1)  # the window's renderer keeps a core; learning is single-threaded
     # Paths given are the user's, from the working directory; the defaults are the
-    # package's own files, so the command works from any folder.
-    config = load_config(*(args.config or [DEFAULT_CONFIG]))
+    # package's own (its config's defaults, its scene), so the command works from any folder.
+    config = load_config(*(args.config or ()))
     scene_path = Path(args.scene) if args.scene else DEFAULT_SCENE
     scene = load_scene(scene_path)  # a SceneError is reported by casa_core.cli.main
     try:

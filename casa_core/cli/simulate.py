@@ -6,7 +6,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from casa_core import vocabulary
-from casa_core.cli._options import example, positive_int
+from casa_core.cli._options import counted, example, positive_int
 from casa_core.cli._workflow import add_config_option, load_workflow_config
 
 if TYPE_CHECKING:
@@ -23,8 +23,7 @@ def register(commands) -> None:
         "in one call (protocol: the files of before, learn of each unknown task and after; "
         "workflow/rules/power.smk).",
         **example(
-            "casa simulate before --config config/config.yaml --participant 1 "
-            "--out data/raw/simulated/p1/before",
+            "casa simulate before --participant 1 --out data/raw/simulated/p1/before",
             "casa simulate protocol --participant 1 --before raw/p1/before --library intents/p1 \\",
             "    --rows learning/p1_unknown_goal.csv learning/p1_unknown_skill.csv \\",
             "    --out raw/p1/after",
@@ -115,9 +114,11 @@ def _simulate(args) -> int:
 def _run_stage(args) -> int:
     from pathlib import Path
 
+    import numpy as np
     import pandas as pd
 
     from casa_core.io.atomic import write_csv
+    from casa_core.io.contract import SURVEYS_NAME
     from casa_core.study import simulate
     from casa_core.study.settings import StudySettings
 
@@ -135,12 +136,15 @@ def _run_stage(args) -> int:
     settings = StudySettings.from_config(config)
     index = args.participant - 1
     pid = simulate.participant_id(index)
+    # What the stage wrote, each count named: a trial is a .json and a .csv.
+    written: list[tuple[int, str]]
     if args.stage == "protocol":
         written = _protocol(args, index, scene, settings=settings)
     elif args.stage == "before":
-        written = simulate.simulate_before_learning(
+        trials = simulate.simulate_before_learning(
             index, scene, settings=settings, out_dir=Path(args.out)
         )
+        written = [(len(trials), "trial(s)")]
     elif args.stage == "learn":
         row, timing = simulate.learn_from_demonstrations(
             Path(args.before),
@@ -151,31 +155,36 @@ def _run_stage(args) -> int:
             pid=pid,
         )
         write_csv(args.out, pd.DataFrame([row]))
-        written = [args.out]
         if args.timing:
             write_csv(args.timing, pd.DataFrame([timing]))
-            written.append(args.timing)
+        learned = int(not np.isnan(timing["train_seconds"]))  # NaN: no demonstrations
+        written = [(learned, "learned intent(s)"), (1 + bool(args.timing), "table(s)")]
     else:
-        learned = sorted(Path(args.library).rglob("*.intent.json"))
-        written = simulate.simulate_after_learning(
+        learned_files = sorted(Path(args.library).rglob("*.intent.json"))
+        trials = simulate.simulate_after_learning(
             index,
             scene,
             settings=settings,
-            learned=learned,
+            learned=learned_files,
             before_dir=Path(args.before),
             out_dir=Path(args.out),
         )
-    print(f"casa simulate {args.stage}: participant {pid}, {len(written)} file(s)")
+        written = [(len(trials), "trial(s)"), (1, SURVEYS_NAME)]
+    print(f"casa simulate {args.stage}: participant {pid}, {counted(written)} written")
     return 0
 
 
-def _protocol(args, index: int, scene: Scene, *, settings) -> list:
-    """``casa simulate protocol``: every folder is filled aside and renamed when all are done."""
+def _protocol(args, index: int, scene: Scene, *, settings) -> list[tuple[int, str]]:
+    """``casa simulate protocol``: every folder is filled aside and renamed when all are done.
+
+    Returns what was written, each count named (:func:`casa_core.cli._options.counted`).
+    """
     from pathlib import Path
 
     import pandas as pd
 
     from casa_core.io.atomic import atomic_folders, write_csv
+    from casa_core.io.contract import SURVEYS_NAME
     from casa_core.study import simulate
 
     tasks = vocabulary.UNKNOWN_TASKS
@@ -194,4 +203,10 @@ def _protocol(args, index: int, scene: Scene, *, settings) -> list:
         tables += zip(args.timing_rows, run.timings, strict=True)
     for path, row in tables:
         write_csv(path, pd.DataFrame([row]))
-    return [*run.before, *run.learned, *run.after, *(path for path, _ in tables)]
+    trials = len(run.before) + len(run.after)
+    return [
+        (trials, "trial(s)"),
+        (len(run.learned), "learned intent(s)"),
+        (1, SURVEYS_NAME),
+        (len(tables), "table(s)"),
+    ]

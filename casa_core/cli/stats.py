@@ -48,7 +48,7 @@ def register(commands) -> None:
         help="a margin as a fraction of the reference condition's mean (repeatable; "
         "replaces statistics.noninferiority_fractions)",
     )
-    add_config_option(command)
+    add_config_option(command, "workflow config whose statistics block gives the margins")
     command.set_defaults(func=_stats)
 
 

@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from casa_core.cli._errors import cannot_write
-from casa_core.cli._options import example
+from casa_core.cli._options import counted, example
 
 
 def register(commands) -> None:
@@ -54,8 +54,25 @@ def _validate(args) -> int:
     errors = [problem for problem in problems if problem.is_error]
     warned = f" ({len(problems) - len(errors)} warning(s))" if len(errors) < len(problems) else ""
     print(
-        f"casa validate: {len(files)} file(s) checked, {bad_files} {verdict}, "
+        f"casa validate: {_checked(files)}, {bad_files} {verdict}, "
         f"{len(problems)} problem(s){warned}",
         file=sys.stderr,
     )
     return 1 if errors and not args.allow_invalid else 0
+
+
+#: The kinds of file ``casa validate`` reads, and their words in its summary: a trial is
+#: its .json and its .csv, counted once.
+CHECKED_KINDS = (("trial", "trial(s)"), ("surveys", "survey file(s)"), ("scene", "scene file(s)"))
+#: The kinds it lists but does not read, and their words.
+UNREAD_KINDS = (("intent", "learned intent file(s)"), ("other", "other file(s)"))
+
+
+def _checked(files) -> str:
+    """``253 trial(s) and 11 survey file(s) checked (22 learned intent file(s) not read)``."""
+    kinds = [check.kind for check in files]
+    read = counted([(kinds.count(kind), word) for kind, word in CHECKED_KINDS])
+    unread = [(kinds.count(kind), word) for kind, word in UNREAD_KINDS]
+    if not any(count for count, _ in unread):
+        return f"{read} checked"
+    return f"{read} checked ({counted(unread)} not read)"

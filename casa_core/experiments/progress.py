@@ -179,12 +179,16 @@ def target_units(config: Mapping, target: str) -> dict[str, tuple[str, ...]]:
     raise ValueError(f"progress: no target {target!r} (targets: {', '.join(UNIT_WORDS)})")
 
 
-def unit_configs(target: str, units: Mapping[str, object]) -> dict[str, Path]:
-    """Each unit's config file, as the workflow writes it (:data:`INTERIM`).
+def unit_configs(
+    target: str, units: Mapping[str, object], workflow: Path | str = "."
+) -> dict[str, Path]:
+    """Each unit's config file, as the workflow in folder ``workflow`` writes it (:data:`INTERIM`).
 
     Examples
     --------
     >>> unit_configs("power", {"default/r1": 5})
     {'default/r1': PosixPath('data/interim/power/default/r1/config.yaml')}
+    >>> unit_configs("robustness", {"paper": 15}, "/work/casa")["paper"].as_posix()
+    '/work/casa/data/interim/robustness/paper/config.yaml'
     """
-    return {unit: INTERIM / target / unit / "config.yaml" for unit in units}
+    return {unit: Path(workflow) / INTERIM / target / unit / "config.yaml" for unit in units}

@@ -25,7 +25,7 @@ from casa_core.learning.features import (
     object_positions,
     state_features,
 )
-from casa_core.learning.maxent import MaxEntIRL, end_match
+from casa_core.learning.maxent import MaxEntIRL, end_match, kept_record, stop_reason
 from casa_core.learning.neural_intent import NeuralIntent, calibrate
 
 __all__ = [
@@ -40,6 +40,8 @@ __all__ = [
     "demo_waypoints",
     "end_match",
     "feature_names",
+    "kept_record",
     "object_positions",
     "state_features",
+    "stop_reason",
 ]

@@ -7,9 +7,8 @@ features, scene objects, seed, SHA-256 hashes of the demonstrations, the IRL
 settings and the training history.
 
 Format ``casa-intent``, version :data:`VERSION`: a JSON object with the keys of
-:data:`REQUIRED_KEYS`.
-The weights are stored per parameter as shape, dtype and base64 of the
-little-endian bytes, so the file is plain text and self-describing. The key
+:data:`REQUIRED_KEYS`. The weights are stored per parameter as shape, dtype and base64
+of the little-endian bytes, so the file is plain text and self-describing. The key
 ``checksum`` is the SHA-256 of the canonical JSON (sorted keys, no spaces) of
 every other key: a truncated, edited or bit-flipped file is detected. Files are
 written atomically (:mod:`casa_core.io.atomic`). The format is described for readers
@@ -54,6 +53,7 @@ import torch
 from casa_core.io.atomic import atomic_write_text
 from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
+from casa_core.learning.maxent import kept_record, stop_reason
 from casa_core.planning import PlannerConfig
 
 FORMAT = "casa-intent"
@@ -71,7 +71,7 @@ _KINDS = (
     ("a JSON string", str, ("name", "task", "participant")),
     ("a JSON integer", int, ("seed",)),
     ("a JSON list", list, ("demo_hashes", "history", "objects", "guides")),
-    ("a JSON object", dict, ("network", "planner", "weights")),
+    ("a JSON object", dict, ("network", "planner", "weights", "irl_config")),
     ("a JSON number", (int, float), ("cost_scale", "cost_offset", "length_scale")),
 )
 
@@ -104,14 +104,15 @@ class LibraryEntry:
     metadata: dict
 
     def summary(self) -> str:
-        """One line: name, task, participant, seed, demonstrations, iterations, convergence."""
+        """One line: name, task, participant, seed, demos, how IRL ran (data-contracts.md)."""
         m = self.metadata
-        history = m["history"]
-        converged = bool(history and history[-1].get("converged"))
+        history, kept = m["history"], kept_record(m["history"]) or {}
+        most, match = m["irl_config"].get("max_iterations", "?"), kept.get("verified_match")
         return (
             f"{m['name']}\ttask={m['task']}\tparticipant={m['participant']}\tseed={m['seed']}"
-            f"\tdemos={len(m['demo_hashes'])}\titerations={len(history)}"
-            f"\tconverged={'yes' if converged else 'no'}\tfile={self.path.name}"
+            f"\tdemos={len(m['demo_hashes'])}\titerations={len(history)}/{most}"
+            f"\tstopped={stop_reason(history)}\tkept={kept.get('iteration', '-')}"
+            f"\tend_match_m={'-' if match is None else f'{match:.4f}'}\tfile={self.path.name}"
         )
 
 

@@ -58,6 +58,33 @@ def end_match(distance_m, rot_error):
     return distance_m + ROT_METRES_PER_RADIAN * rot_error
 
 
+def stop_reason(history: list[dict]) -> str:
+    """Why IRL stopped: ``"converged"`` or ``"budget"`` (it ran ``max_iterations``).
+
+    ``converged`` is :class:`IRLConfig`'s criterion (``tol_gap``, ``tol_end``,
+    ``tol_match``) at the last iteration. It says when training stopped, not how good the
+    intent is: the weights kept are those of the ``kept`` iteration, chosen by planning
+    (:class:`MaxEntIRL`), not necessarily the last (docs/data-contracts.md).
+
+    Examples
+    --------
+    >>> stop_reason([{"converged": False}]), stop_reason([{}, {"converged": True}])
+    ('budget', 'converged')
+    """
+    return "converged" if history and history[-1].get("converged") else "budget"
+
+
+def kept_record(history: list[dict]) -> dict | None:
+    """The record of the iteration whose weights the intent has, if the history marks it.
+
+    Examples
+    --------
+    >>> kept_record([{"iteration": 1}, {"iteration": 2, "kept": True}])
+    {'iteration': 2, 'kept': True}
+    """
+    return next((record for record in history if record.get("kept")), None)
+
+
 class MaxEntIRL:
     """Deep maximum-entropy IRL as an estimator: configure, then :meth:`fit`.
 

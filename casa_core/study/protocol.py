@@ -8,8 +8,9 @@
    task by direct teleoperation;
 4. after learning: Unknown Goal and Unknown Skill with CASA and the learned intents.
 
-The order of the three methods is counterbalanced across participants: participant
-i uses the (i mod 6)-th of the 6 orders of NA, PBA, CASA, for every task.
+The order of the three methods is counterbalanced across participants, the same for
+every task: participant number i (1-based; 0-based index i - 1) uses order
+``(i - 1) mod 6`` of the 6 orders of NA, PBA, CASA in :data:`METHOD_ORDERS`, counted from 0.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from casa_core.vocabulary import METHODS, UNKNOWN_TASKS
 if TYPE_CHECKING:
     import pandas as pd
 
-#: The 6 orders of the methods; participant i uses the (i mod 6)-th.
+#: The 6 orders of the methods; the participant of 0-based index k uses the (k mod 6)-th.
 METHOD_ORDERS = tuple(permutations(METHODS))
 #: Seconds at the end of a CASA trial over which every beta_hat must stay below epsilon.
 DETECTION_WINDOW = 3.0

@@ -20,7 +20,8 @@ def test_valid_folder_exits_0(tmp_path, capsys):
         conditions=[("known_goal", "NA", "no_misspecification")],
     )
     assert main(["validate", str(tmp_path / "ds")]) == 0
-    assert "2 file(s) checked, 0 invalid, 0 problem(s)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "1 trial(s) and 1 survey file(s) checked, 0 invalid, 0 problem(s)" in err
 
 
 def test_bad_files_are_all_listed_and_exit_1(tmp_path, capsys):
@@ -37,14 +38,14 @@ def test_bad_files_are_all_listed_and_exit_1(tmp_path, capsys):
     assert f"{tmp_path / 'missing'}: [exists]" in err
     assert f"casa validate: {tmp_path / 'missing'} does not exist" in err
     # 2 x 11 trials and the lone one, 2 of them bad; the missing path is a problem, not a file.
-    assert "23 file(s) checked, 2 invalid," in err
+    assert "23 trial(s) checked, 2 invalid," in err
 
 
 def test_a_path_that_does_not_exist_is_named_and_not_counted_as_a_file(tmp_path, capsys):
     assert main(["validate", str(tmp_path / "nope")]) == 1
     err = capsys.readouterr().err
     assert f"casa validate: {tmp_path / 'nope'} does not exist" in err
-    assert "0 file(s) checked, 0 invalid, 1 problem(s)" in err
+    assert "0 trial(s) checked, 0 invalid, 1 problem(s)" in err
 
 
 def test_report_and_allow_invalid(tmp_path, capsys):
@@ -131,7 +132,7 @@ def test_warnings_are_printed_and_exit_0(tmp_path, capsys):
     assert main(["validate", str(tmp_path / "ds"), "--report", str(report)]) == 0
     err = capsys.readouterr().err
     assert f"{csv_path}: column 't', line {len(table) // 2 + 2}: warning [tick-irregular]" in err
-    assert "1 file(s) checked, 0 invalid, 1 problem(s) (1 warning(s))" in err
+    assert "1 trial(s) checked, 0 invalid, 1 problem(s) (1 warning(s))" in err
     rows = read_table(report)
     assert rows[["status", "rule"]].values.tolist() == [["warning", "tick-irregular"]]
 

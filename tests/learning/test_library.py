@@ -463,3 +463,34 @@ def test_measured_times_are_not_stored_so_a_file_is_the_same_bytes_on_every_run(
     assert first == second and b"seconds" not in first
     stored = library.load_intent(tmp_path / "a" / "red_p01.intent.json")
     assert stored.metadata["history"] == HISTORY
+
+
+def test_the_listing_says_why_training_stopped_and_which_iteration_the_file_keeps(tmp_path):
+    # IRL that ran out of iterations (the usual case) and kept an earlier iteration, and IRL
+    # that met its criterion: the words say so, not a bare converged=no.
+    ran_out = [
+        {"iteration": 1, "converged": None},
+        {"iteration": 2, "kept": True, "verified_match": 0.0123},
+        {"iteration": 3, "converged": False},
+    ]
+    save(tmp_path / "lib", make_intent("ran_out"), history=ran_out)
+    met = [{"iteration": 1}, {"iteration": 2, "converged": True, "kept": True}]
+    save(tmp_path / "lib", make_intent("met"), history=met)
+    listed = run_casa("library", "list", str(tmp_path / "lib"))
+    assert listed.returncode == 0, listed.stderr
+    lines = {line.split("\t")[0]: line.split("\t") for line in listed.stdout.splitlines()}
+    most = IRLConfig().max_iterations
+    assert lines["ran_out"][5:9] == [
+        f"iterations=3/{most}",
+        "stopped=budget",
+        "kept=2",
+        "end_match_m=0.0123",
+    ]
+    assert lines["met"][5:9] == [f"iterations=2/{most}", "stopped=converged", "kept=2"] + [
+        "end_match_m=-"
+    ]
+    assert "converged=" not in listed.stdout
+    # The help says what the words mean and what to read instead.
+    help_text = " ".join(run_casa("library", "list", "--help").stdout.split())
+    assert "budget: it ran all its iterations, as it usually does" in help_text
+    assert "learning.csv: endpoint_error_m" in help_text

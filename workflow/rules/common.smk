@@ -12,6 +12,7 @@ from casa_core.experiments import robustness as casa_variants
 from casa_core import vocabulary
 from casa_core.io.atomic import atomic_write_text
 from casa_core.io.contract import INTENT_SUFFIX
+from casa_core.scene import DEFAULT_SCENE
 
 
 def config_layers():
@@ -30,6 +31,8 @@ def config_layers():
 # default); each problem names the file, the dotted key and the rule it breaks.
 config.clear()
 config.update(casa_config.load_config(*config_layers(), overrides=workflow.config_settings.config))
+# A config without a scene (the schema's default, null) means the package's own, as for casa.
+config["scene"] = config["scene"] or os.path.relpath(DEFAULT_SCENE)
 
 
 def effective_config_file(path=Path("data/interim/config.yaml"), settings=None):
