@@ -31,10 +31,12 @@ from __future__ import annotations
 
 import copy
 import difflib
+import hashlib
 import json
 import math
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -54,6 +56,9 @@ PACKAGE_DEFAULTS = "the package's defaults"
 OVERRIDES = "--config"
 #: The variant that overlays nothing: the study's config as it is.
 DEFAULT_VARIANT = "default"
+#: Hex digits of the sha256 that name an effective config: enough to tell configurations
+#: apart at a glance, short enough for a line of a table or a figure's caption.
+DIGEST_LENGTH = 12
 
 
 class ConfigError(ValueError):
@@ -158,6 +163,68 @@ def merge(base: dict, overlay: Mapping) -> dict:
 def config_text(config: Mapping) -> str:
     """The config as YAML text, keys sorted: the same config always gives the same bytes."""
     return yaml.safe_dump(_plain(config), sort_keys=True)
+
+
+def config_digest(path: Path | str) -> str:
+    """The first :data:`DIGEST_LENGTH` hex digits of the sha256 of a config file's text.
+
+    The file is the effective config the workflow writes (``data/interim/config.yaml``,
+    :func:`config_text`: keys sorted), so the same configuration always has the same
+    digest, and any changed key, default or ``--config`` override another.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be read.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "config.yaml"
+    >>> _ = path.write_text(config_text({"simulation": {"seed": 2021}}))
+    >>> config_digest(path) == hashlib.sha256(b"simulation:\\n  seed: 2021\\n").hexdigest()[:12]
+    True
+    """
+    text = Path(path).read_text(encoding="utf-8")
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:DIGEST_LENGTH]
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Which configuration built an output: the config files layered and the digest.
+
+    ``files`` are named as the workflow gives them (relative to the repository, as its
+    ``config_layers()`` shows them), so that an output names no absolute path and stays
+    the same bytes between two runs of one configuration.
+
+    Examples
+    --------
+    >>> built = Provenance(("config/config.yaml", "config/ci.yaml"), "1a2b3c4d5e6f")
+    >>> built.line()
+    'Built from config/config.yaml + config/ci.yaml (effective config sha256 1a2b3c4d5e6f)'
+    >>> built.label
+    'config/config.yaml + config/ci.yaml (effective config sha256 1a2b3c4d5e6f)'
+    """
+
+    files: tuple[str, ...]
+    digest: str
+
+    @classmethod
+    def of(cls, files: Sequence[str], effective: Path | str) -> Provenance:
+        """The config files as given and the digest of the effective config
+        (:func:`config_digest`)."""
+        return cls(tuple(map(str, files)), config_digest(effective))
+
+    @property
+    def label(self) -> str:
+        """The config files in the order they are merged, joined by ``+``, and the digest:
+        a table's cell (text, never read back as a number, as a bare digest of digits
+        and an ``e`` would be)."""
+        return f"{' + '.join(self.files)} (effective config sha256 {self.digest})"
+
+    def line(self) -> str:
+        """The sentence an output opens or ends with, without its full stop."""
+        return f"Built from {self.label}"
 
 
 def _read(path: Path) -> dict:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import inspect
 import subprocess
 import sys
@@ -17,6 +18,9 @@ from casa_core.config import (
     DEFAULT_CONFIG,
     SCHEMA_PATH,
     ConfigError,
+    Provenance,
+    config_digest,
+    config_text,
     default,
     load_config,
     merge,
@@ -30,6 +34,16 @@ from tests.workflow.test_workflow import ENV, copy_workflow, snakemake
 CONFIG = ROOT / "config" / "config.yaml"
 CI = ROOT / "config" / "ci.yaml"
 CASA = str(Path(sys.executable).parent / "casa")
+#: The CI configuration's files, named as the workflow's config_layers() names them.
+CI_LAYERS = ["config/config.yaml", "config/ci.yaml"]
+
+
+def write_effective_config(folder: Path) -> tuple[Path, str]:
+    """The CI configuration's effective config, written as the workflow writes it, and
+    its digest by hand: the first 12 hex digits of the sha256 of the file's bytes."""
+    path = folder / "effective.yaml"
+    path.write_text(config_text(load_config(CONFIG, CI)), encoding="utf-8")
+    return path, hashlib.sha256(path.read_bytes()).hexdigest()[:12]
 
 
 def _objects(node: dict, key: str = ""):
@@ -243,7 +257,13 @@ def workflow_copy(tmp_path):
             "simulation.demonstrations_whn",
         ),
         ("config/config.yaml", "  population:", "  populaton:", "simulation.populaton"),
-        ("config/config.yaml", "  participants: 11\n", "", "simulation.participants: missing"),
+        # Every key has a default now; a value out of range is still refused.
+        (
+            "config/config.yaml",
+            "  participants: 11\n",
+            "  participants: 0\n",
+            "simulation.participants: must be >= 1",
+        ),
     ],
 )
 def test_snakemake_dry_run_refuses_a_bad_config_naming_the_key(
@@ -329,3 +349,18 @@ def test_the_workflow_commands_refuse_a_bad_config_naming_the_key(tmp_path):
         result.stderr
     )
     assert not (tmp_path / "work").exists()
+
+
+def test_the_digest_names_the_effective_config_and_the_line_its_files(tmp_path):
+    path, digest = write_effective_config(tmp_path)
+    assert config_digest(path) == digest and len(digest) == 12
+    # Another configuration, another digest: the default one differs from CI's.
+    other = tmp_path / "default.yaml"
+    other.write_text(config_text(load_config(CONFIG)), encoding="utf-8")
+    assert config_digest(other) != digest
+    built = Provenance.of(CI_LAYERS, path)
+    assert built.line() == (
+        f"Built from config/config.yaml + config/ci.yaml (effective config sha256 {digest})"
+    )
+    with pytest.raises(OSError):
+        config_digest(tmp_path / "missing.yaml")

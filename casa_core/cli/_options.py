@@ -201,3 +201,44 @@ def _number(text: str, low: float, *, strict: bool) -> float:
         bound = f"{'>' if strict else '>='} {low:g}"
         raise argparse.ArgumentTypeError(f"must be a finite number {bound}, got {text!r}")
     return value
+
+
+def provenance_options(command) -> None:
+    """``--config-files`` and ``--effective-config``: the configuration an output names.
+
+    The workflow passes both (workflow/rules/common.smk, ``provenance_options``), so that
+    a table or figure says which configuration built it; see :func:`provenance`.
+    """
+    command.add_argument(
+        "--config-files",
+        nargs="+",
+        metavar="YAML",
+        help="the config files layered, in order, as named in the output (e.g. "
+        "config/config.yaml config/ci.yaml); needs --effective-config",
+    )
+    command.add_argument(
+        "--effective-config",
+        metavar="YAML",
+        help="the effective, validated config (data/interim/config.yaml), whose sha256 the "
+        "output names; needs --config-files",
+    )
+
+
+def provenance(args):
+    """The :class:`casa_core.config.Provenance` the options of :func:`provenance_options`
+    give, or None without them.
+
+    Raises
+    ------
+    ValueError
+        If only one of the two options is given.
+    OSError
+        If the effective config cannot be read.
+    """
+    from casa_core.config import Provenance
+
+    if not args.config_files and not args.effective_config:
+        return None
+    if not args.config_files or not args.effective_config:
+        raise ValueError("--config-files and --effective-config go together: give both")
+    return Provenance.of(args.config_files, args.effective_config)

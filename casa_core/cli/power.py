@@ -8,7 +8,7 @@ table; ``casa progress`` (:mod:`~casa_core.cli.progress`) reports how far it has
 from __future__ import annotations
 
 from casa_core.cli._errors import fail
-from casa_core.cli._options import example, positive_int
+from casa_core.cli._options import example, positive_int, provenance, provenance_options
 from casa_core.cli.progress import EXAMPLE as PROGRESS_EXAMPLE
 from casa_core.io import read_table
 
@@ -22,7 +22,10 @@ _EXAMPLES = {
         "casa power table --detections data/interim/power/*/r*/detections.csv \\",
         "    --out data/processed/power/power.csv",
     ),
-    "figure": ("casa power figure --power data/processed/power/power.csv --out figures/power",),
+    "figure": (
+        "casa power figure --power data/processed/power/power.csv --out figures/power \\",
+        "    --config-files config/config.yaml --effective-config data/interim/config.yaml",
+    ),
     "progress": PROGRESS_EXAMPLE,
 }
 
@@ -62,6 +65,7 @@ def register(commands) -> None:
     figure.add_argument(
         "--out", required=True, metavar="PREFIX", help="writes PREFIX.pdf and PREFIX.png"
     )
+    provenance_options(figure)
     figure.set_defaults(func=_figure)
 
 
@@ -107,7 +111,8 @@ def _figure(args) -> int:
     from casa_core.figures.style import save_figure
 
     try:
-        fig = power_figure(read_table(args.power))
+        built = provenance(args)
+        fig = power_figure(read_table(args.power), provenance=built.line() if built else "")
     except (OSError, ValueError) as error:
         return fail("power figure", error)
     written = ", ".join(map(str, save_figure(fig, args.out)))

@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from casa_core.cli._errors import fail
-from casa_core.cli._options import example, positive_float
+from casa_core.cli._options import example, positive_float, provenance, provenance_options
 from casa_core.defaults import EPSILON
 from casa_core.io import read_table
 
@@ -29,7 +29,8 @@ _EXAMPLES = {
     "data/processed/simulated/stats.csv \\\n      --likert "
     "data/processed/simulated/likert.csv --arbitration "
     "data/processed/case_study/arbitration.csv \\\n      --case-steps "
-    "data/processed/case_study/steps.csv --epsilon 1.0 "
+    "data/processed/case_study/steps.csv --epsilon 1.0 \\\n      --config-files "
+    "config/config.yaml --effective-config data/interim/config.yaml \\\n      "
     "--out data/processed/simulated/results.md --out-html data/report/simulated/results.html",
 }
 #: The examples of the pages of the claims under each variant.
@@ -43,7 +44,8 @@ _CLAIMS_EXAMPLE = (
 _MERGE_EXAMPLE = (
     "casa report robustness --claims data/processed/robustness/*/claims.csv \\",
     "    --out-csv data/processed/robustness/claims.csv "
-    "--out-md data/processed/robustness/results.md --figure figures/robustness",
+    "--out-md data/processed/robustness/results.md --figure figures/robustness \\",
+    "    --config-files config/config.yaml --effective-config data/interim/config.yaml",
 )
 
 
@@ -114,6 +116,7 @@ def register(commands) -> None:
     )
     results.add_argument("--out", required=True, metavar="MD", help="results.md to write")
     results.add_argument("--out-html", metavar="HTML", help="its HTML page (optional)")
+    provenance_options(results)
     results.set_defaults(func=_results)
     markdown = pages.add_parser(
         "markdown",
@@ -163,6 +166,7 @@ def _add_variant_pages(pages) -> None:
     merge.add_argument(
         "--figure", required=True, metavar="PREFIX", help="writes PREFIX.pdf and PREFIX.png"
     )
+    provenance_options(merge)
     merge.set_defaults(func=_robustness)
 
 
@@ -191,9 +195,16 @@ def _results(args) -> int:
     from casa_core.stats.results import results_markdown
 
     try:
+        built = provenance(args)
         tables = read_claim_tables(args)
         claims = evaluate_claims(tables, epsilon=args.epsilon)
-        text = results_markdown(claims, tables, dataset=args.dataset, operator=args.operator)
+        text = results_markdown(
+            claims,
+            tables,
+            dataset=args.dataset,
+            operator=args.operator,
+            provenance=built.line() if built else "",
+        )
     except (OSError, ValueError) as error:
         return fail("report", error)
     atomic_write_text(args.out, text)
@@ -269,11 +280,16 @@ def _robustness(args) -> int:
     from casa_core.stats.robustness import merge_variants, robustness_markdown
 
     try:
+        built = provenance(args)
         merged = merge_variants([read_table(path) for path in args.claims])
-        text = robustness_markdown(merged)
+        text = robustness_markdown(merged, provenance=built.line() if built else "")
         fig = robustness_figure(merged)
     except (OSError, ValueError) as error:
         return fail("report", error)
+    if built:
+        # A constant column: the table names its configuration and stays the same bytes
+        # between two runs of it.
+        merged = merged.assign(config=built.label)
     write_csv(args.out_csv, merged)
     atomic_write_text(args.out_md, text)
     written = [args.out_csv, args.out_md, *map(str, save_figure(fig, args.figure))]

@@ -215,19 +215,27 @@ BRACKET_INSET = 0.03
 LABEL_ROOM = 0.1
 
 
-def draw_brackets(ax, brackets: Sequence[tuple[float, float, float, str]]) -> None:
+def draw_brackets(
+    ax,
+    brackets: Sequence[tuple[float, float, float, str]],
+    linestyles: Sequence[str] | None = None,
+) -> None:
     """Draw significance brackets ``(x_left, x_right, base, label)`` stacked without overlap.
 
     ``base`` is the data height above which the bracket must sit (the highest data under
     it); a bracket overlapping narrower ones along x sits one step above them. The step
-    is 9 % of the y range.
+    is 9 % of the y range. ``linestyles``, one per bracket (default solid), lets a
+    figure tell kinds of brackets apart.
     """
     if not brackets:
         return
     low, high = ax.get_ylim()
     step = 0.09 * (high - low)
     placed: list[tuple[float, float, float]] = []
-    for x0, x1, base, label in sorted(brackets, key=lambda b: (b[1] - b[0], b[0])):
+    styles = list(linestyles) if linestyles is not None else ["-"] * len(brackets)
+    widths = [(x1 - x0, x0) for x0, x1, _, _ in brackets]
+    for index in sorted(range(len(brackets)), key=widths.__getitem__):
+        (x0, x1, base, label), linestyle = brackets[index], styles[index]
         # Narrow brackets first; a wider one goes above every bracket it overlaps.
         # Brackets that meet at a bar count as overlapping: their stars would collide.
         near = [py for px0, px1, py in placed if px0 <= x1 + LABEL_ROOM and x0 <= px1 + LABEL_ROOM]
@@ -237,7 +245,8 @@ def draw_brackets(ax, brackets: Sequence[tuple[float, float, float, str]]) -> No
         tick = 0.25 * step
         # Ends pulled in a little, so brackets sharing a bar do not touch.
         x0, x1 = x0 + BRACKET_INSET, x1 - BRACKET_INSET
-        ax.plot([x0, x0, x1, x1], [y - tick, y, y, y - tick], color="0.1", lw=0.7, zorder=6)
+        ys = [y - tick, y, y, y - tick]
+        ax.plot([x0, x0, x1, x1], ys, color="0.1", lw=0.7, linestyle=linestyle, zorder=6)
         ax.text((x0 + x1) / 2, y, label, ha="center", va="bottom", fontsize=7, zorder=6)
     top = max(y for _, _, y in placed) + step
     if top > high:

@@ -5,7 +5,10 @@ three questions (the robot understood, made it effortless, was useful) along the
 axis and one bar per condition with the mean and standard error on the 1-7 scale, and
 every participant's answer as a point. Given ``stats.csv``, its H4 rows mark the tests:
 brackets for the Holm-corrected Wilcoxon signed-rank tests with p < .05, and the
-Friedman test of each question under its name.
+Friedman test of each question under its name. A significant pair is significant in
+either direction, so each bracket says which: ``<`` or ``>`` between its two bars' means,
+left to right, and a dashed line where the pair goes against the paper's direction
+(CASA, after learning in the misspecified tasks, rated above the other condition).
 """
 
 from __future__ import annotations
@@ -20,11 +23,16 @@ from casa_core.figures.objective import parse_comparison, stars
 from casa_core.io import tables
 from casa_core.io.contract import SURVEY_COLUMNS
 from casa_core.stats.study import answered_by_model
-from casa_core.vocabulary import KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
+from casa_core.vocabulary import CASA_AFTER_LEARNING, KNOWN_TASK, QUESTION_LABELS, TASK_LABELS
 
 SCALE = (1, 7)
 #: The stats table's analyses the figure shows.
 FRIEDMAN, WILCOXON = "friedman", "wilcoxon"
+#: Per task, the condition the paper expects to be rated highest (H4's, and Known Goal's
+#: CASA): the one the Wilcoxon tests compare with every other.
+EXPECTED_HIGHEST = {KNOWN_TASK: "CASA"}
+#: A bracket's line: the pair in the paper's direction (or without one), and against it.
+WITH_PAPER, AGAINST_PAPER = "-", "--"
 
 
 def prepare_likert(likert: pd.DataFrame) -> pd.DataFrame:
@@ -119,8 +127,10 @@ def likert_figure(
         ``participant, task, method, phase, question, score`` (and ``source``).
     stats : DataFrame, optional
         ``stats.csv``; its ``wilcoxon`` rows with (Holm-adjusted) ``p < .05`` become
-        brackets over the two conditions in that task and question, and its
-        ``friedman`` rows are written under each question (:func:`likert_tests`).
+        brackets over the two conditions in that task and question, labelled with the
+        relation of their means (``<``, ``>``) and the stars, dashed where the pair goes
+        against the paper's direction; its ``friedman`` rows are written under each
+        question (:func:`likert_tests`).
     title : str, optional
         First words of the caption (default "Likert scores"); answers of simulated
         participants add that they are model output.
@@ -151,7 +161,9 @@ def likert_figure(
             ax.set_xticklabels([_question_label(q, in_tests, stats is not None) for q in questions])
             ax.set_ylim(SCALE[0] - 0.3, SCALE[1] + 0.3)
             ax.set_yticks(range(SCALE[0], SCALE[1] + 1))
-            _bars.draw_brackets(ax, _brackets(tops, in_tests))
+            means = points.groupby(["question", "condition"], sort=False)["score"].mean()
+            brackets, linestyles = _brackets(tops, in_tests, means, _expected_highest(task))
+            _bars.draw_brackets(ax, brackets, linestyles)
         for ax in axes:
             if ax.has_data():
                 ax.set_ylabel("Likert score (1-7)")
@@ -178,7 +190,10 @@ def likert_figure(
                 f" Wilcoxon signed-rank tests of {TASK_LABELS[KNOWN_TASK]}'s CASA, and of"
                 " CASA after learning in the other tasks, against each other condition,"
                 " Holm-corrected over those comparisons per task and question; shown where"
-                f" p < {_p_text(SIGNIFICANCE)} (alpha); * p < .05, ** p < .01, *** p < .001."
+                f" p < {_p_text(SIGNIFICANCE)} (alpha); * p < .05, ** p < .01, *** p < .001;"
+                " < or > before the stars: the left bar's mean below or above the right one's;"
+                " dashed: against the paper's direction (Known Goal's CASA, or CASA after"
+                " learning, rated above the other condition), solid: in it."
             )
         style.add_caption(fig, caption)
     return fig
@@ -200,17 +215,40 @@ def _question_label(question: str, tests: pd.DataFrame, with_tests: bool) -> str
     return f"{label}\n{stars(float(friedman['p'].iloc[0])) or 'n.s.'}"
 
 
-def _brackets(tops, tests: pd.DataFrame) -> list[tuple[float, float, float, str]]:
-    """Bracket geometry of the significant Wilcoxon rows whose two bars are drawn."""
-    brackets = []
+def _expected_highest(task: str) -> str:
+    """The condition the paper expects rated highest in ``task`` (:data:`EXPECTED_HIGHEST`)."""
+    return EXPECTED_HIGHEST.get(task, CASA_AFTER_LEARNING)
+
+
+def _relation(left: float, right: float) -> str:
+    """``<``, ``>`` or ``=``: the left bar's mean against the right one's."""
+    return "<" if left < right else ">" if left > right else "="
+
+
+def _brackets(
+    tops, tests: pd.DataFrame, means: pd.Series, expected: str
+) -> tuple[list[tuple[float, float, float, str]], list[str]]:
+    """The significant Wilcoxon rows whose two bars are drawn: bracket geometry, line style.
+
+    Each label is the relation of the two bars' means, left to right, then the stars; the
+    line is :data:`AGAINST_PAPER` when ``expected`` is one of the pair and not rated above
+    the other, else :data:`WITH_PAPER`.
+    """
+    brackets, linestyles = [], []
     wilcoxon = tests[tests["analysis"] == WILCOXON]
     for row in wilcoxon.itertuples(index=False):
         label = stars(row.p)
         pair = ((row.question, row.a), (row.question, row.b))
         if not label or any(key not in tops for key in pair):
             continue
-        xa, xb = (tops[key][0] for key in pair)
+        (xa, _), (xb, _) = (tops[key] for key in pair)
+        left, right = sorted(pair, key=lambda key: tops[key][0])
         x0, x1 = min(xa, xb), max(xa, xb)
         base = max(top for (q, _), (x, top) in tops.items() if q == row.question and x0 <= x <= x1)
-        brackets.append((x0, x1, base, label))
-    return brackets
+        brackets.append((x0, x1, base, f"{_relation(means[left], means[right])} {label}"))
+        against = False
+        if expected in (row.a, row.b):
+            other = row.b if row.a == expected else row.a
+            against = not means[(row.question, expected)] > means[(row.question, other)]
+        linestyles.append(AGAINST_PAPER if against else WITH_PAPER)
+    return brackets, linestyles

@@ -3,7 +3,8 @@
 Drawn from ``data/processed/power/power.csv`` (:func:`casa_core.stats.power.power_table`):
 a panel per hypothesis (rows) and metric (columns); a line per variant (colour) and
 analysis (solid: the paper's form, dashed: within subjects), with the Wilson 95 %
-interval as error bars; the 80 % line and the paper's N.
+interval as error bars; the 80 % line and the paper's N. Given the configuration that
+built the table, the caption ends with it on a line of its own.
 """
 
 from __future__ import annotations
@@ -25,13 +26,16 @@ LINESTYLES: dict[str, Any] = {"paper": "-", "within": "--"}
 COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000")
 
 
-def power_figure(power: pd.DataFrame) -> Figure:
+def power_figure(power: pd.DataFrame, *, provenance: str = "") -> Figure:
     """Draw power against N: hypotheses as rows, metrics as columns.
 
     Parameters
     ----------
     power : pandas.DataFrame
         ``power.csv``: columns :data:`casa_core.stats.power.POWER_COLUMNS`.
+    provenance : str, optional
+        The configuration that built the table (:meth:`casa_core.config.Provenance.line`),
+        the caption's last line.
 
     Returns
     -------
@@ -81,6 +85,7 @@ def power_figure(power: pd.DataFrame) -> Figure:
             "hypothesis is detected on the metric (docs/power.md), with Wilson 95% "
             f"intervals; dotted: {TARGET:.0%} power; grey line: the paper's N = {PAPER_N}. "
             "The effects are the model's, not people's.",
+            f"{provenance}." if provenance else "",
         )
     fig.axes_by_name = named  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig

@@ -194,11 +194,17 @@ def note_axes(ax, text: str) -> None:
         spine.set_visible(False)
 
 
-def add_caption(fig: Figure, text: str) -> None:
-    """A one-line caption at the bottom of the figure (data origin and notes)."""
+def add_caption(fig: Figure, text: str, last_line: str = "") -> None:
+    """A one-line caption at the bottom of the figure (data origin and notes).
+
+    ``last_line`` (e.g. the configuration that built the figure) is written on a line of
+    its own under the caption.
+    """
     if text:
         # About 20 characters of 7-pt text per inch of figure width.
         wrapped = textwrap.fill(text, width=int(20 * fig.get_figwidth()))
+        if last_line:
+            wrapped += "\n" + textwrap.fill(last_line, width=int(20 * fig.get_figwidth()))
         # Just below the figure (the saved bounding box grows to hold it), clear of a
         # legend placed at the bottom edge.
         fig.text(0.5, -0.02, wrapped, ha="center", va="top", fontsize=7, color="0.25")

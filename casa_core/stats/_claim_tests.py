@@ -4,12 +4,15 @@ Each check is one test in one form: the paper's form (each participant-condition
 independent observation: ANOVA or ANCOVA with Tukey HSD, independent non-inferiority,
 mean Likert scores) or the within-subjects form (repeated-measures ANOVA, paired
 non-inferiority, Friedman and Wilcoxon). A check passes, fails, or cannot be decided
-(``passed`` None: the test was skipped or is absent, or no margin is known).
+(``passed`` None: the test was skipped or is absent, or no margin is known). A check
+that does not pass says why (:attr:`Check.reason`, and at the end of its text): not
+significant, or significant but in the opposite direction to the paper's, say.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -22,6 +25,7 @@ from casa_core.vocabulary import (
     CASA_AFTER_LEARNING,
     CASA_BEFORE_LEARNING,
     KNOWN_TASK,
+    TASK_LABELS,
     UNKNOWN_TASKS,
 )
 
@@ -37,18 +41,48 @@ PAPER_BOUNDS = {
 }
 
 
+#: Between a check's outcome and why it did not pass; results.md splits a check's text at
+#: its last ": ", so the reason never holds one.
+BECAUSE = " — "
+
+
 @dataclass(frozen=True)
 class Check:
     """One test of a hypothesis: whether it passed (None: undecided) and its numbers.
 
     ``metric`` and ``form`` (``paper`` or ``within``) say which metric and analysis it
-    belongs to (H1-H3; empty for H4's).
+    belongs to (H1-H3; empty for H4's). ``requirement`` is what the check asks in the
+    paper's direction (``"CASA after learning below NA (...)"``), for the hypothesis'
+    criterion; ``reason`` is why it did not pass, in short and without numbers
+    (``"significant, but in the opposite direction"``; empty when it passed), and the
+    text ends with the outcome and the same reason with its numbers.
     """
 
     passed: bool | None
     text: str
     metric: str = ""
     form: str = ""
+    requirement: str = ""
+    reason: str = ""
+
+
+class Part(NamedTuple):
+    """One condition of a check: met (None: undecided), its numbers, why it is not met.
+
+    ``reason`` is the short reason (no numbers), ``why`` the same with its numbers.
+    """
+
+    passed: bool | None
+    text: str
+    reason: str = ""
+    why: str = ""
+
+
+def _outcome(passed: bool | None, why: str = "") -> str:
+    """``pass``, ``fail`` or ``undecided``, and why a check failed (an undecided one's
+    numbers already say what is missing)."""
+    verdict = {True: "pass", False: "fail", None: "undecided"}[passed]
+    return f"{verdict}{BECAUSE}{why}" if why and passed is False else verdict
 
 
 def _text(stats: pd.DataFrame) -> pd.DataFrame:
@@ -73,11 +107,12 @@ def _rows(stats, hypothesis, task, metric, analysis, **where) -> pd.DataFrame:
     return stats[chosen]
 
 
-def _significant(rows: pd.DataFrame, name: str) -> tuple[bool | None, str]:
+def _significant(rows: pd.DataFrame, name: str) -> Part:
     if rows.empty or not np.isfinite(rows["p"].iloc[0]):
-        return None, f"{name} not computed"
+        return Part(None, f"{name} not computed", "test not computed", f"{name} not computed")
     p = float(rows["p"].iloc[0])
-    return p < SIGNIFICANCE, f"{name} {p_value(p)}"
+    why = f"not significant ({name} {p_value(p)})"
+    return Part(p < SIGNIFICANCE, f"{name} {p_value(p)}", "not significant", why)
 
 
 def condition_means(trials: pd.DataFrame, tasks) -> dict[str, pd.Series]:
@@ -89,24 +124,54 @@ def condition_means(trials: pd.DataFrame, tasks) -> dict[str, pd.Series]:
     }
 
 
-def _direction(means: pd.Series, better: str, worse: str) -> tuple[bool | None, str]:
+#: A reason's words for condition means on the other side of the paper's direction.
+OPPOSITE = "in the opposite direction"
+
+
+def _direction(means: pd.Series, better: str, worse: str) -> Part:
+    """The paper's direction: ``better``'s mean below ``worse``'s (lower is better)."""
     if better not in means.index or worse not in means.index:
-        return None, f"no trials of {better} or {worse}"
+        text = f"no trials of {better} or {worse}"
+        return Part(None, text, "no trials of a condition", text)
     difference = float(means[better] - means[worse])
-    return difference < 0, f"mean {better} - {worse} = {difference:.3g}"
+    text = f"mean {better} - {worse} = {difference:.3g}"
+    if difference > 0:
+        return Part(False, text, OPPOSITE, f"{OPPOSITE} ({better} above {worse})")
+    return Part(difference < 0, text, "no difference", f"no difference ({better} equal to {worse})")
 
 
-def _combine(form: str, metric: str, parts: list[tuple[bool | None, str]]) -> Check:
-    outcomes = [passed for passed, _ in parts]
+def _in_direction(tests: list[Part], direction: Part) -> list[Part]:
+    """The parts of a superiority check; a significant test the wrong way round says so."""
+    if direction.reason == OPPOSITE and all(part.passed for part in tests):
+        reason = f"significant, but {direction.reason}"
+        direction = direction._replace(reason=reason, why=f"significant, but {direction.why}")
+    return [*tests, direction]
+
+
+def _combine(form: str, metric: str, parts: list[Part], requirement: str = "") -> Check:
+    outcomes = [part.passed for part in parts]
     # A failed part decides; an undecided one leaves the check undecided otherwise.
     passed = False if False in outcomes else None if None in outcomes else True
-    verdict = {True: "pass", False: "fail", None: "undecided"}[passed]
-    text = f"{metric} ({form}): {', '.join(t for _, t in parts)}: {verdict}"
-    return Check(passed, text, metric, form)
+    deciding = [part for part in parts if part.passed is passed] if passed is not True else []
+    reason = ", and ".join(dict.fromkeys(part.reason for part in deciding))
+    why = ", and ".join(part.why for part in deciding)
+    text = f"{metric} ({form}): {', '.join(part.text for part in parts)}: {_outcome(passed, why)}"
+    return Check(passed, text, metric, form, requirement, reason)
+
+
+def _where(task: str) -> str:
+    """The task(s) a test is run on, in the paper's words."""
+    if task == POOLED:
+        return " and ".join(TASK_LABELS[t] for t in UNKNOWN_TASKS) + " pooled"
+    return TASK_LABELS.get(task, task)
 
 
 def superiority(stats, means, *, hypothesis, task, metric, better, worse) -> list[Check]:
     """``better`` beats ``worse`` on ``metric``: the paper's test, then the within one."""
+    requirement = (
+        f"{better} below {worse} ({_where(task)}): the test at p < {SIGNIFICANCE} and the "
+        f"mean of {better} lower"
+    )
     omnibus = "ancova" if task == POOLED else "anova"
     direction = _direction(means[metric], better, worse)
     paper = [_significant(_rows(stats, hypothesis, task, metric, omnibus, term="method"), omnibus)]
@@ -114,10 +179,12 @@ def superiority(stats, means, *, hypothesis, task, metric, better, worse) -> lis
     pair = tukey[tukey["comparison"].isin([f"{better} vs {worse}", f"{worse} vs {better}"])]
     if not tukey.empty:
         paper.append(_significant(pair, f"Tukey {better} vs {worse}"))
-    within = _rows(stats, hypothesis, task, metric, "rm_anova", term="method")
+    within = [
+        _significant(_rows(stats, hypothesis, task, metric, "rm_anova", term="method"), "rm_anova")
+    ]
     return [
-        _combine("paper", metric, [*paper, direction]),
-        _combine("within", metric, [_significant(within, "rm_anova"), direction]),
+        _combine("paper", metric, _in_direction(paper, direction), requirement),
+        _combine("within", metric, _in_direction(within, direction), requirement),
     ]
 
 
@@ -134,27 +201,37 @@ def _noninferior_flag(value) -> bool | None:
 
 def noninferiority(stats, *, hypothesis, task, metric, new, reference) -> list[Check]:
     """``new`` not inferior to ``reference``: independent (paper), then paired (within)."""
+    requirement = (
+        f"{new} not inferior to {reference} ({_where(task)}): the one-sided 95% upper bound "
+        f"of mean {new} - {reference} below the margin"
+    )
     rows = _rows(stats, hypothesis, task, metric, "noninferiority")
     rows = rows[rows["comparison"] == f"{new} vs {reference}"]
     checks = []
     for form, paired in (("paper", False), ("within", True)):
         name = f"{metric} {task} non-inferior to {reference} ({form})"
+        keys = {"metric": metric, "form": form, "requirement": requirement}
         row = rows[rows["note"].str.contains("paired") == paired]
         if row.empty or not np.isfinite(row["ci_high"].iloc[0]):
-            checks.append(Check(None, f"{name}: bound not computed: undecided", metric, form))
+            text = f"{name}: bound not computed: {_outcome(None, 'bound not computed')}"
+            checks.append(Check(None, text, **keys, reason="bound not computed"))
             continue
         bound = float(row["ci_high"].iloc[0])
         flag = _noninferior_flag(row["noninferior"].iloc[0])
         if flag is not None:
-            text = f"bound {bound:.3g} at margin {float(row['margin'].iloc[0]):.3g} (stats.csv)"
+            margin = float(row["margin"].iloc[0])
+            text = f"bound {bound:.3g} at margin {margin:.3g} (stats.csv)"
         elif (task, metric) in PAPER_BOUNDS:
             margin = PAPER_BOUNDS[(task, metric)]
             flag, text = bound < margin, f"bound {bound:.3g} vs the paper's {margin:g}"
         else:
-            text = f"{name}: bound {bound:.3g}, no margin: undecided"
-            checks.append(Check(None, text, metric, form))
+            text = f"{name}: bound {bound:.3g}, no margin: {_outcome(None, 'no margin')}"
+            checks.append(Check(None, text, **keys, reason="no margin"))
             continue
-        checks.append(Check(flag, f"{name}: {text}: {'pass' if flag else 'fail'}", metric, form))
+        reason = "" if flag else "bound not below the margin"
+        why = f"{reason} ({new} may be worse than {reference} by the margin or more)"
+        text = f"{name}: {text}: {_outcome(flag, why)}"
+        checks.append(Check(flag, text, **keys, reason=reason))
     return checks
 
 
@@ -207,12 +284,16 @@ def likert_checks(stats: pd.DataFrame, likert: pd.DataFrame) -> list[Check]:
             means = part.groupby("method", observed=True)["score"].mean()
             name = f"{task} {question}"
             if CASA_AFTER_LEARNING not in means.index or len(means) < 2:
-                checks.append(Check(None, f"{name}: too few conditions: undecided"))
+                text = f"{name}: too few conditions: {_outcome(None, 'too few conditions')}"
+                checks.append(Check(None, text, reason="too few conditions"))
             else:
                 others = means.drop(CASA_AFTER_LEARNING)
                 best = bool(means[CASA_AFTER_LEARNING] > others.max())
                 text = f"mean {means[CASA_AFTER_LEARNING]:.2f} vs at most {others.max():.2f}"
-                checks.append(Check(best, f"{name} (paper): {text}: {'pass' if best else 'fail'}"))
+                why = f"not rated highest ({others.idxmax()} {others.max():.2f})"
+                reason = "" if best else "not rated highest"
+                outcome = _outcome(best, why)
+                checks.append(Check(best, f"{name} (paper): {text}: {outcome}", reason=reason))
             checks.append(_likert_within(stats, task, question, name))
     return checks
 
@@ -222,11 +303,20 @@ def _likert_within(stats, task, question, name) -> Check:
     wilcoxon = _rows(stats, "H4", task, question, "wilcoxon")
     wilcoxon = wilcoxon[wilcoxon["comparison"].str.startswith(f"{CASA_AFTER_LEARNING} vs ")]
     if wilcoxon.empty:
-        parts.append((None, "no Wilcoxon tests"))
+        parts.append(Part(None, "no Wilcoxon tests", "no Wilcoxon tests", "no Wilcoxon tests"))
     for index, row in wilcoxon.iterrows():
         other = row["comparison"].removeprefix(f"{CASA_AFTER_LEARNING} vs ")
-        significant, text = _significant(wilcoxon.loc[[index]], f"vs {other}")
-        higher = None if not np.isfinite(row["estimate"]) else bool(row["estimate"] > 0)
-        passed = None if significant is None or higher is None else significant and higher
-        parts.append((passed, f"{text} (difference {row['estimate']:.3g})"))
+        test = _significant(wilcoxon.loc[[index]], f"vs {other}")
+        text = f"{test.text} (difference {row['estimate']:.3g})"
+        if not np.isfinite(row["estimate"]):
+            parts.append(Part(None, text, "no difference computed", f"vs {other} no difference"))
+        elif test.passed is not None and row["estimate"] <= 0:
+            # The paper's direction here: CASA after learning rated above the other.
+            found = OPPOSITE if row["estimate"] < 0 else "no difference"
+            reason = f"{'significant, but' if test.passed else 'not significant, and'} {found}"
+            side = "below" if row["estimate"] < 0 else "equal to"
+            why = f"vs {other} {reason} ({CASA_AFTER_LEARNING} {side} {other})"
+            parts.append(Part(False, text, reason, why))
+        else:
+            parts.append(test._replace(text=text))
     return _combine("within", name, parts)

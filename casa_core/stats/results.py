@@ -1,7 +1,8 @@
 """``results.md``: the paper's claims on one dataset, as :mod:`casa_core.stats.claims` judges them.
 
-It opens with what the data are (the dataset, how many participants, whether they are
-simulated, the inference settings of the trials), then a table of verdicts, then per
+It opens with the configuration that built it (when the workflow names it), what the data
+are (the dataset, how many participants, whether they are simulated, the inference
+settings of the trials), then a table of verdicts, then per
 claim the paper's words, the criterion, the numbers measured and the verdict, saying
 plainly where it differs from the paper. Every number is read from the tables.
 """
@@ -112,6 +113,7 @@ def results_markdown(
     *,
     dataset: str,
     operator: str | None = None,
+    provenance: str = "",
 ) -> str:
     """The Markdown of ``results.md`` from :func:`casa_core.stats.claims.evaluate_claims`.
 
@@ -127,6 +129,9 @@ def results_markdown(
     operator : str, optional
         The simulated operator model (``simulation.operator``), named for a simulated
         dataset beside a pointer to the robustness table (:func:`modelling_note`).
+    provenance : str, optional
+        The configuration that built it (:meth:`casa_core.config.Provenance.line`),
+        written under the title.
 
     Returns
     -------
@@ -154,6 +159,7 @@ def results_markdown(
     """
     require_columns(claims, CLAIM_COLUMNS, "claims table")
     lines = [f"# Claims of the paper on dataset {dataset}", ""]
+    lines += [f"{provenance}.", ""] if provenance else []
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
     note = modelling_note(tables["trials"], operator=operator)
     lines += [note, ""] if note else []

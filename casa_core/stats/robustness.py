@@ -92,8 +92,11 @@ def _value(value) -> str:
     return "" if pd.isna(value) else f" ({float(value):.2f})"
 
 
-def robustness_markdown(claims: pd.DataFrame) -> str:
+def robustness_markdown(claims: pd.DataFrame, *, provenance: str = "") -> str:
     """``results.md`` of the robustness table: claims x variants, each variant's choices.
+
+    ``provenance``, the configuration that built it
+    (:meth:`casa_core.config.Provenance.line`), is written under the title.
 
     Examples
     --------
@@ -111,9 +114,9 @@ def robustness_markdown(claims: pd.DataFrame) -> str:
     variants = list(dict.fromkeys(claims["variant"]))
     heads = [f"{v} (default)" if v == DEFAULT_VARIANT else v for v in variants]
     settings = claims.drop_duplicates("variant").set_index("variant")["settings"]
-    lines = [
-        "# Claims of the paper under each modelling variant",
-        "",
+    lines = ["# Claims of the paper under each modelling variant", ""]
+    lines += [f"{provenance}.", ""] if provenance else []
+    lines += [
         "The simulated study run once per variant, with the same participants and seeds in "
         "each; only the modelling choices below differ. Each claim is judged as in a "
         "dataset's results.md (casa_core/stats/claims.py); the number in brackets is the "

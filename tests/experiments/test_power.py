@@ -34,6 +34,7 @@ from casa_core.stats.power import (
 )
 from casa_core.vocabulary import CASA_AFTER_LEARNING, CASA_BEFORE_LEARNING, UNKNOWN_TASKS
 from tests.experiments.test_robustness import CI, CONFIG, _overlay, dry_run
+from tests.test_config import CI_LAYERS, write_effective_config
 from tests.workflow.test_workflow import snakemake
 
 # --- seeds and configs ---------------------------------------------------------------
@@ -257,6 +258,25 @@ def test_the_figure_has_a_panel_per_hypothesis_and_metric():
     assert any(list(line.get_xdata()) == [11, 11] for line in panel.get_lines())
     assert sum(len(line.get_xdata()) == 2 and line.get_marker() == "o"
                for line in panel.get_lines()) == 2  # fmt: skip
+
+
+def test_the_figure_command_names_the_configuration_that_built_the_table(tmp_path, monkeypatch):
+    from casa_core.figures import style
+
+    effective, digest = write_effective_config(tmp_path)
+    rows = [dict(variant="default", N=n, hypothesis="H1", metric="error", analysis="paper",
+                 power=0.5, ci_low=0.3, ci_high=0.7, replicates=2) for n in (2, 3)]  # fmt: skip
+    write_csv(tmp_path / "power.csv", pd.DataFrame(rows))
+    drawn = []
+    monkeypatch.setattr(style, "save_figure", lambda fig, prefix: drawn.append(fig) or [prefix])
+    args = ["power", "figure", "--power", str(tmp_path / "power.csv"), "--out", "power"]
+    assert main([*args, "--config-files", *CI_LAYERS, "--effective-config", str(effective)]) == 0
+    # The caption ends with it, from a line of its own (wrapped to the figure's width).
+    (fig,) = drawn
+    (caption,) = [t.get_text() for t in fig.texts if "Share of simulated" in t.get_text()]
+    line = f"Built from config/config.yaml + config/ci.yaml (effective config sha256 {digest})."
+    assert "\nBuilt from " in caption
+    assert " ".join(caption.split()).endswith(" " + line)
 
 
 # --- progress ------------------------------------------------------------------------

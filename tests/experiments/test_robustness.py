@@ -23,6 +23,7 @@ from casa_core.stats.claims import VERDICTS
 from casa_core.stats.robustness import ROBUSTNESS_COLUMNS, merge_variants
 from casa_core.vocabulary import UNKNOWN_TASKS
 from tests.io.test_logs_synthetic import ROOT
+from tests.test_config import CI_LAYERS, write_effective_config
 from tests.workflow.test_workflow import copy_workflow, snakemake
 
 CONFIG = ROOT / "config" / "config.yaml"
@@ -230,6 +231,36 @@ def test_the_merge_writes_the_table_results_and_figure(tmp_path):
     # The same variant twice is refused, naming the claim and the variant.
     with pytest.raises(ValueError, match="claim C1 of variant paper is given twice"):
         merge_variants([paper, paper])
+
+
+def test_the_merge_names_the_configuration_that_built_it(tmp_path):
+    effective, digest = write_effective_config(tmp_path)
+    paths = []
+    for frame in (
+        _claims_rows("default", {"C1": "holds"}),
+        _claims_rows("paper", {"C1": "partly"}),
+    ):
+        paths.append(tmp_path / f"{frame['variant'][0]}.csv")
+        frame.to_csv(paths[-1], index=False)
+    out = tmp_path / "out"
+    argv = ["report", "robustness", "--claims", *map(str, paths), "--out-csv"]
+    argv += [str(out / "claims.csv"), "--out-md", str(out / "results.md")]
+    argv += ["--figure", str(out / "robustness"), "--config-files", *CI_LAYERS]
+    argv += ["--effective-config", str(effective)]
+    assert cli.main(argv) == 0
+    line = f"Built from config/config.yaml + config/ci.yaml (effective config sha256 {digest})."
+    assert (out / "results.md").read_text().splitlines()[:3] == [
+        "# Claims of the paper under each modelling variant",
+        "",
+        line,
+    ]
+    merged = pd.read_csv(out / "claims.csv")
+    assert list(merged.columns) == [*ROBUSTNESS_COLUMNS, "config"]
+    # A constant column, the line's words.
+    assert set(merged["config"]) == {line.removeprefix("Built from ").removesuffix(".")}
+    first = {name: (out / name).read_bytes() for name in ("claims.csv", "results.md")}
+    assert cli.main(argv) == 0
+    assert {name: (out / name).read_bytes() for name in first} == first
 
 
 def test_the_figure_colours_each_cell_by_its_verdict_and_frames_the_default():

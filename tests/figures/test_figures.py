@@ -445,9 +445,11 @@ def test_likert_draws_every_answer_as_a_point():
 def test_likert_marks_come_from_the_stats_table():
     fig = likert_figure(make_likert(), likert_stats())
     known = fig.axes[0]
-    # Only the significant row (p = .004 -> "**") draws a bracket.
-    assert [t.get_text() for t in known.texts] == ["**"]
+    # Only the significant row (p = .004 -> "**") draws a bracket; NA's mean (2, left)
+    # below CASA's (5, right), the paper's direction: solid.
+    assert [t.get_text() for t in known.texts] == ["< **"]
     (bracket,) = bracket_lines(known)
+    assert bracket.get_linestyle() == "-"
     # From the NA bar to the CASA bar of the first question (Understood, x = 0): the bars
     # sit at -0.2, 0 and 0.2 (4 slots of 0.2 in a group 0.8 wide), ends pulled in by 0.03.
     assert bracket.get_xdata() == pytest.approx([-0.17, -0.17, 0.17, 0.17])
@@ -458,6 +460,24 @@ def test_likert_marks_come_from_the_stats_table():
     caption = texts(fig)
     for words in ("Friedman", "Wilcoxon signed-rank", "Holm-corrected", "p < .05 (alpha)"):
         assert words in caption
+
+
+def test_likert_brackets_say_the_direction_and_dash_the_pairs_against_the_paper():
+    # Significant both ways in Known Goal's Understood: CASA (mean 5) above NA (2), as
+    # the paper expects, and below PBA (6), against it (make_likert's scores).
+    stats = likert_stats()
+    stats.loc[2, "p"] = 0.02
+    known = likert_figure(make_likert(), stats).axes[0]
+    marks = {
+        (round(float(line.get_xdata()[0]), 2), text.get_text(), line.get_linestyle())
+        for line, text in zip(bracket_lines(known), known.texts, strict=True)
+    }
+    # Bars at -0.2 (NA), 0 (PBA), 0.2 (CASA), bracket ends pulled in by 0.03; each sign
+    # reads the left bar against the right one.
+    assert marks == {(-0.17, "< **", "-"), (0.03, "> *", "--")}
+    caption = texts(likert_figure(make_likert(), stats))
+    assert "< or > before the stars: the left bar's mean below or above the right one's" in caption
+    assert "dashed: against the paper's direction" in caption
 
 
 def test_likert_rejects_a_bad_stats_row():

@@ -24,6 +24,7 @@ from casa_core.stats.results import results_markdown
 from casa_core.stats.study import MODEL_OUTPUT_NOTE
 from casa_core.vocabulary import CASA_AFTER_LEARNING
 from tests.io.test_logs_synthetic import SCENE, write_dataset
+from tests.test_config import CI_LAYERS, write_effective_config
 from tests.workflow.test_workflow import copy_workflow, snakemake
 
 EPSILON = 1.0
@@ -262,6 +263,50 @@ def test_a_significant_test_in_the_wrong_direction_fails():
     assert "error (paper): ancova p = .010, mean CASA after learning - NA = " in row["details"]
 
 
+def test_each_failed_check_says_why_and_the_criterion_says_the_direction():
+    # Error significant (p = .017) with CASA after learning's mean 7 above NA's (10
+    # against h3_tables' 3); efficiency not significant (p = .21) and relative effort
+    # significant (p = .01), both with CASA after learning's mean below NA's.
+    table, trials = h3_tables({"error": 0.017, "efficiency": 0.21, "relative_effort": 0.01})
+    trials["error"] = trials["error"].where(trials["method"] == "NA", 10.0)
+    row = judge(known_goal_steps(1, 1), stats_table=table, trials=trials).loc["H3"]
+    lines = dict(line.rpartition(": ")[::2] for line in row["details"].splitlines())
+    wrong = "error (within): rm_anova p = .017, mean CASA after learning - NA = 7"
+    assert lines[wrong] == (
+        "fail — significant, but in the opposite direction (CASA after learning above NA)"
+    )
+    slow = "efficiency (within): rm_anova p = .210, mean CASA after learning - NA = -1"
+    assert lines[slow] == "fail — not significant (rm_anova p = .210)"
+    right = "relative_effort (within): rm_anova p = .010, mean CASA after learning - NA = -1"
+    assert lines[right] == "pass"
+    assert row["verdict"] == "differs"  # 2 of 6 passed, below PARTLY_SHARE
+    assert row["measured"] == (
+        "2 of 6 checks passed (6 decided); failed: 2 significant, but in the opposite "
+        "direction; 2 not significant"
+    )
+    assert (
+        "CASA after learning below NA (Unknown Goal and Unknown Skill pooled)" in row["criterion"]
+    )
+    assert "(lower is better)" in row["criterion"]
+    # In results.md each check's outcome says why, beside the check.
+    tables = {"trials": trials, "steps": known_goal_steps(1, 1), "stats": table}
+    judged = claims.evaluate_claims(tables, epsilon=EPSILON)
+    text = results_markdown(judged, tables, dataset="pilot")
+    assert f"| {wrong} | fail — significant, but in the opposite direction " in text
+
+
+def test_a_wilcoxon_test_the_other_way_round_fails_h4_saying_so():
+    table, likert = h4_tables("participant")
+    against = table["comparison"] == f"{CASA_AFTER_LEARNING} vs NA"
+    table.loc[against, "estimate"] = -1.0  # CASA after learning rated below NA
+    row = judge(known_goal_steps(1, 1), stats_table=table, likert=likert).loc["H4"]
+    assert row["verdict"] == "partly"  # the two within-subjects checks fail
+    assert (
+        "fail — vs NA significant, but in the opposite direction (CASA after learning below NA)"
+        in row["details"]
+    )
+
+
 def noninferiority_rows(bound, *, margin=np.nan, flag=pd.NA) -> pd.DataFrame:
     rows = [
         stats_row("H1", "noninferiority", "known_goal", "relative_effort", np.nan,
@@ -404,6 +449,33 @@ def test_cli_writes_results_md_and_its_page(tmp_path, capsys):
     write_csv(paths["steps"], steps.drop(columns="alpha"))
     assert main(args) == 2  # a table that cannot be used (casa_core/cli/_errors.py)
     assert "steps table: missing column(s) 'alpha'" in capsys.readouterr().err
+
+
+def test_cli_results_md_names_the_configuration_that_built_it(tmp_path, capsys):
+    effective, digest = write_effective_config(tmp_path)
+    steps = known_goal_steps(10, 10)
+    args = ["report", "results", "--dataset", "pilot", "--out", str(tmp_path / "results.md")]
+    for name, frame in {"trials": trials_of(steps), "steps": steps, "stats": empty_stats()}.items():
+        write_csv(tmp_path / f"{name}.csv", frame)
+        args += [f"--{name}", str(tmp_path / f"{name}.csv")]
+    given = ["--config-files", *CI_LAYERS, "--effective-config", str(effective)]
+    assert main([*args, *given]) == 0
+    first = (tmp_path / "results.md").read_bytes()
+    lines = first.decode().splitlines()
+    # Under the title, the files as given and the digest of the effective config's text.
+    assert lines[:3] == [
+        "# Claims of the paper on dataset pilot",
+        "",
+        f"Built from config/config.yaml + config/ci.yaml (effective config sha256 {digest}).",
+    ]
+    # The same configuration, the same bytes; no time and no absolute path in them.
+    assert main([*args, *given]) == 0
+    assert (tmp_path / "results.md").read_bytes() == first
+    assert str(tmp_path) not in first.decode()
+    # One option without the other is refused (exit status 2).
+    capsys.readouterr()
+    assert main([*args, "--config-files", *CI_LAYERS]) == 2
+    assert "--config-files and --effective-config go together" in capsys.readouterr().err
 
 
 @pytest.mark.pipeline

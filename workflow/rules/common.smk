@@ -3,6 +3,7 @@
 import functools
 import os
 import re
+import shlex
 import sys
 from pathlib import Path
 
@@ -308,3 +309,15 @@ def replicate_config_input(wildcards):
 
 wildcard_constraints:
     r=r"\d+",
+
+
+# Which configuration built an output: results.md, the robustness table and the power
+# figure name the config files layered and the sha256 of the effective config
+# (casa_core.config.Provenance). The rule's `config` input is that file, so an output
+# naming it is rebuilt when it changes.
+
+
+def provenance_options(wildcards, input):
+    """`--config-files` (config_layers()) and `--effective-config` (the rule's config input)."""
+    files = " ".join(shlex.quote(path) for path in config_layers())
+    return f"--config-files {files} --effective-config {shlex.quote(str(input.config))}"

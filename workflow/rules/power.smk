@@ -120,7 +120,8 @@ rule power_table:
 
 rule power_figure:
     input:
-        POWER / "power.csv",
+        power=POWER / "power.csv",
+        config=CONFIG_FILE,
     output:
         pdf=FIGURES / "power.pdf",
         png=FIGURES / "power.png",
@@ -130,8 +131,10 @@ rule power_figure:
         "../envs/casa.yaml"
     params:
         stem=FIGURES / "power",
+        provenance=provenance_options,
     shell:
-        "exec casa power figure --power {input} --out {params.stem} > {log} 2>&1"
+        "exec casa power figure --power {input.power} {params.provenance} "
+        "--out {params.stem} > {log} 2>&1"
 
 
 rule power:

@@ -29,6 +29,7 @@ rule report_summary:
 rule report_results:
     input:
         unpack(results_input),
+        config=CONFIG_FILE,
     output:
         md=PROCESSED / "{ds}" / "results.md",
         html=report(
@@ -45,11 +46,12 @@ rule report_results:
         case_study=case_study_options,
         epsilon=config["simulation"]["epsilon"],
         operator=operator_option,
+        provenance=provenance_options,
     shell:
         "exec casa report results --dataset {wildcards.ds} --trials {input.trials} "
         "--steps {input.steps} --stats {input.stats} --likert {input.likert} "
-        "{params.case_study} {params.operator} --epsilon {params.epsilon} --out {output.md} "
-        "--out-html {output.html} > {log} 2>&1"
+        "{params.case_study} {params.operator} --epsilon {params.epsilon} "
+        "{params.provenance} --out {output.md} --out-html {output.html} > {log} 2>&1"
 
 
 rule report_stats:

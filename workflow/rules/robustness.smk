@@ -82,7 +82,7 @@ rule robustness_stats:
         "../envs/casa.yaml"
     params:
         margins=margin_options,
-        config=CONFIG_FILE,
+        config=variant_config_input,
     shell:
         "exec casa stats --trials {input.trials} --likert {input.likert} {params.margins} "
         "--config {params.config} "
@@ -138,7 +138,8 @@ rule robustness_claims:
 
 rule robustness_table:
     input:
-        expand(ROBUST / "{variant}" / "claims.csv", variant=VARIANTS),
+        claims=expand(ROBUST / "{variant}" / "claims.csv", variant=VARIANTS),
+        config=CONFIG_FILE,
     output:
         csv=ROBUST / "claims.csv",
         md=ROBUST / "results.md",
@@ -150,9 +151,10 @@ rule robustness_table:
         "../envs/casa.yaml"
     params:
         stem=FIGURES / "robustness",
+        provenance=provenance_options,
     shell:
-        "exec casa report robustness --claims {input} --out-csv {output.csv} "
-        "--out-md {output.md} --figure {params.stem} > {log} 2>&1"
+        "exec casa report robustness --claims {input.claims} --out-csv {output.csv} "
+        "--out-md {output.md} --figure {params.stem} {params.provenance} > {log} 2>&1"
 
 
 # On the machine running Snakemake, so that the line shows beside Snakemake's own.
