@@ -7,7 +7,7 @@ from pathlib import Path
 
 from casa_core import vocabulary
 from casa_core.cli._errors import fail
-from casa_core.cli._options import example, nonnegative_float, positive_float
+from casa_core.cli._options import dataset_scene, example, nonnegative_float, positive_float
 
 #: The columns of ``replay.csv``, one row per trial.
 SUMMARY_COLUMNS = [
@@ -139,8 +139,8 @@ def _replay(args) -> int:
     for trial in trials:
         root = trial["root"]
         if given is None and root not in scenes:
-            own = root / "scene.yaml"
-            scenes[root] = load_scene(own if trial["folder"] and own.is_file() else None)
+            # A folder's own scene.yaml; a file given alone: the package's.
+            scenes[root] = load_scene(dataset_scene(root, None) if trial["folder"] else None)
         scene = given or scenes[root]
         rows.append(_replay_one(trial, scene, args, epsilon, out, figures))
     return _summarise(rows, out)
