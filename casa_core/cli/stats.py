@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from casa_core.cli._errors import cannot_write
@@ -48,6 +49,13 @@ def register(commands) -> None:
         help="a margin as a fraction of the reference condition's mean (repeatable; "
         "replaces statistics.noninferiority_fractions)",
     )
+    command.add_argument(
+        "--noninferiority-alpha",
+        type=float,
+        metavar="LEVEL",
+        help="the one-sided level of the non-inferiority tests (default: the config's "
+        "statistics.noninferiority_alpha, the paper's 0.05)",
+    )
     add_config_option(command, "workflow config whose statistics block gives the margins")
     command.set_defaults(func=_stats)
 
@@ -64,8 +72,11 @@ def _stats(args) -> int:
                 parse_margin(text, "--margin-fraction") for text in args.margin_fraction
             ),
         )
+        configured = Margins.from_config(load_workflow_config(args)[0]["statistics"])
         if not args.margin and not args.margin_fraction:
-            margins = Margins.from_config(load_workflow_config(args)[0]["statistics"])
+            margins = configured
+        alpha = args.noninferiority_alpha
+        margins = replace(margins, alpha=configured.alpha if alpha is None else alpha)
     except ValueError as error:  # ConfigError and SceneError too: they name file and key
         print(f"casa stats: {error}", file=sys.stderr)
         return 2

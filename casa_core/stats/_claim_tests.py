@@ -19,7 +19,9 @@ import pandas as pd
 
 from casa_core.defaults import SIGNIFICANCE
 from casa_core.io.tables import numeric_column, require_columns
+from casa_core.stats._rows import noninferiority_level
 from casa_core.stats.apa import p_value
+from casa_core.stats.margins import PAPER_ALPHA
 from casa_core.stats.study import POOLED, _conditions, _prepare_trials
 from casa_core.vocabulary import (
     CASA_AFTER_LEARNING,
@@ -166,26 +168,70 @@ def _where(task: str) -> str:
     return TASK_LABELS.get(task, task)
 
 
-def superiority(stats, means, *, hypothesis, task, metric, better, worse) -> list[Check]:
-    """``better`` beats ``worse`` on ``metric``: the paper's test, then the within one."""
-    requirement = (
-        f"{better} below {worse} ({_where(task)}): the test at p < {SIGNIFICANCE} and the "
-        f"mean of {better} lower"
-    )
-    omnibus = "ancova" if task == POOLED else "anova"
+#: The interaction term of the pooled tasks' test, per form.
+INTERACTION = {"paper": ("ancova", "method x task"), "within": ("rm_anova", "method * task")}
+
+
+def _interaction(stats, hypothesis, metric, form) -> float | None:
+    """p of the pooled tasks' method x task term in ``form`` when significant, else None."""
+    analysis, term = INTERACTION[form]
+    rows = _rows(stats, hypothesis, POOLED, metric, analysis, term=term)
+    if rows.empty or not np.isfinite(rows["p"].iloc[0]):
+        return None
+    p = float(rows["p"].iloc[0])
+    return p if p < SIGNIFICANCE else None
+
+
+def _superiority_parts(stats, means, form, *, hypothesis, task, metric, better, worse):
+    """The parts of one form's superiority check on ``task`` (pooled or one task)."""
     direction = _direction(means[metric], better, worse)
+    if form == "within":
+        rows = _rows(stats, hypothesis, task, metric, "rm_anova", term="method")
+        return _in_direction([_significant(rows, "rm_anova")], direction)
+    omnibus = "ancova" if task == POOLED else "anova"
     paper = [_significant(_rows(stats, hypothesis, task, metric, omnibus, term="method"), omnibus)]
     tukey = _rows(stats, hypothesis, task, metric, "tukey")
     pair = tukey[tukey["comparison"].isin([f"{better} vs {worse}", f"{worse} vs {better}"])]
     if not tukey.empty:
         paper.append(_significant(pair, f"Tukey {better} vs {worse}"))
-    within = [
-        _significant(_rows(stats, hypothesis, task, metric, "rm_anova", term="method"), "rm_anova")
-    ]
-    return [
-        _combine("paper", metric, _in_direction(paper, direction), requirement),
-        _combine("within", metric, _in_direction(within, direction), requirement),
-    ]
+    return _in_direction(paper, direction)
+
+
+def superiority(
+    stats, means, *, hypothesis, task, metric, better, worse, task_means=None
+) -> list[Check]:
+    """``better`` beats ``worse`` on ``metric``: the paper's test, then the within one.
+
+    On the pooled tasks, a form whose method x task interaction is significant
+    (:data:`INTERACTION`) is judged by the simple effects of method per task instead
+    (``task_means``: the condition means per task): the pooled test averages effects
+    that differ by task, and the hypothesis asks about each task.
+    """
+    keys = {"hypothesis": hypothesis, "metric": metric, "better": better, "worse": worse}
+    checks = []
+    for form in ("paper", "within"):
+        p = _interaction(stats, hypothesis, metric, form) if task == POOLED else None
+        if p is None or task_means is None:
+            parts = _superiority_parts(stats, means, form, task=task, **keys)
+            checks.append(_combine(form, metric, parts, _superior_requirement(task, keys)))
+            continue
+        analysis = INTERACTION[form][0]
+        for one in UNKNOWN_TASKS:
+            qualified = Part(True, f"{analysis} method x task {p_value(p)}, so {_where(one)}")
+            parts = _superiority_parts(stats, task_means[one], form, task=one, **keys)
+            requirement = _superior_requirement(one, keys) + (
+                " (where method x task is significant, per task)"
+            )
+            checks.append(_combine(form, metric, [qualified, *parts], requirement))
+    return checks
+
+
+def _superior_requirement(task, keys) -> str:
+    better, worse = keys["better"], keys["worse"]
+    return (
+        f"{better} below {worse} ({_where(task)}): the test at p < {SIGNIFICANCE} and the "
+        f"mean of {better} lower"
+    )
 
 
 def _noninferior_flag(value) -> bool | None:
@@ -199,19 +245,37 @@ def _noninferior_flag(value) -> bool | None:
     return None
 
 
+def level_words(stats: pd.DataFrame) -> str:
+    """The non-inferiority level of ``stats`` in words: ``one-sided 95%`` (level .05)."""
+    rows = stats[stats["analysis"].astype(str).str.startswith("noninferiority")]
+    level = noninferiority_level(rows["note"]) if "note" in rows else None
+    return f"one-sided {100 * (1 - (level or PAPER_ALPHA)):g}%"
+
+
 def noninferiority(stats, *, hypothesis, task, metric, new, reference) -> list[Check]:
-    """``new`` not inferior to ``reference``: independent (paper), then paired (within)."""
+    """``new`` not inferior to ``reference``: independent (paper), then paired (within).
+
+    Within subjects, a margin set as a fraction of the reference mean is judged by the
+    paired ratio row (``noninferiority_ratio``) when stats.csv has it: the margin is an
+    estimate, and the ratio test counts its error.
+    """
     requirement = (
-        f"{new} not inferior to {reference} ({_where(task)}): the one-sided 95% upper bound "
-        f"of mean {new} - {reference} below the margin"
+        f"{new} not inferior to {reference} ({_where(task)}): the {level_words(stats)} "
+        f"upper bound of mean {new} - {reference} below the margin (within subjects, for a "
+        "margin that is a fraction of the reference mean: of the ratio of the means)"
     )
     rows = _rows(stats, hypothesis, task, metric, "noninferiority")
     rows = rows[rows["comparison"] == f"{new} vs {reference}"]
+    ratios = _rows(stats, hypothesis, task, metric, "noninferiority_ratio")
+    ratios = ratios[ratios["comparison"] == f"{new} vs {reference}"]
     checks = []
     for form, paired in (("paper", False), ("within", True)):
         name = f"{metric} {task} non-inferior to {reference} ({form})"
         keys = {"metric": metric, "form": form, "requirement": requirement}
         row = rows[rows["note"].str.contains("paired") == paired]
+        ratio = ratios[ratios["note"].str.contains("paired")]
+        if paired and not ratio.empty:
+            row, name = ratio, f"{name}, ratio"
         if row.empty or not np.isfinite(row["ci_high"].iloc[0]):
             text = f"{name}: bound not computed: {_outcome(None, 'bound not computed')}"
             checks.append(Check(None, text, **keys, reason="bound not computed"))
@@ -246,14 +310,26 @@ def h1_checks(stats: pd.DataFrame, trials: pd.DataFrame) -> list[Check]:
     return checks
 
 
+def _task_means(trials: pd.DataFrame) -> dict[str, dict[str, pd.Series]]:
+    return {task: condition_means(trials, [task]) for task in UNKNOWN_TASKS}
+
+
 def h2_checks(stats: pd.DataFrame, trials: pd.DataFrame) -> list[Check]:
-    """H2: CASA before learning superior to PBA (pooled), not inferior to NA (per task)."""
+    """H2: CASA before learning superior to PBA (pooled; per task where method x task is
+    significant), not inferior to NA (per task)."""
     stats, means = _text(stats), condition_means(trials, list(UNKNOWN_TASKS))
+    per_task = _task_means(trials)
     checks = []
     for metric in METRICS:
         key = {"hypothesis": "H2", "metric": metric}
         checks += superiority(
-            stats, means, **key, task=POOLED, better=CASA_BEFORE_LEARNING, worse="PBA"
+            stats,
+            means,
+            **key,
+            task=POOLED,
+            better=CASA_BEFORE_LEARNING,
+            worse="PBA",
+            task_means=per_task,
         )
         for task in UNKNOWN_TASKS:
             checks += noninferiority(
@@ -263,12 +339,16 @@ def h2_checks(stats: pd.DataFrame, trials: pd.DataFrame) -> list[Check]:
 
 
 def h3_checks(stats: pd.DataFrame, trials: pd.DataFrame) -> list[Check]:
-    """H3: CASA after learning superior to NA (pooled over the misspecified tasks)."""
+    """H3: CASA after learning superior to NA (pooled over the misspecified tasks; per task
+    where method x task is significant)."""
     stats, means = _text(stats), condition_means(trials, list(UNKNOWN_TASKS))
+    per_task = _task_means(trials)
     checks = []
     for metric in METRICS:
         key = {"hypothesis": "H3", "task": POOLED, "metric": metric}
-        checks += superiority(stats, means, **key, better=CASA_AFTER_LEARNING, worse="NA")
+        checks += superiority(
+            stats, means, **key, better=CASA_AFTER_LEARNING, worse="NA", task_means=per_task
+        )
     return checks
 
 

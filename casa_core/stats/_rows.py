@@ -32,6 +32,9 @@ STATS_COLUMNS = [
     "sphericity_p",
     "note",
 ]
+#: On every non-inferiority row: the one-sided level of its test and bound
+#: (:func:`noninferiority_level` reads it back from stats.csv).
+LEVEL_NOTE = "one-sided level {:g}"
 #: Epsilon below 1 by more than rounding: the Greenhouse-Geisser correction applies.
 _EPSILON_ONE = 1.0 - 1e-9
 
@@ -167,3 +170,20 @@ class Rows:
 
 def versus(a, b) -> str:
     return f"{a} vs {b}"
+
+
+def noninferiority_level(notes) -> float | None:
+    """The one-sided level the non-inferiority rows' ``notes`` name (:data:`LEVEL_NOTE`).
+
+    Examples
+    --------
+    >>> noninferiority_level(["paired by participant; one-sided level 0.025", ""])
+    0.025
+    >>> noninferiority_level(["independent samples, as the paper"]) is None
+    True
+    """
+    import re
+
+    pattern = re.compile(re.escape(LEVEL_NOTE).replace(r"\{:g\}", r"([0-9.eE+-]+)"))
+    found = {float(m.group(1)) for note in notes if (m := pattern.search(str(note)))}
+    return found.pop() if len(found) == 1 else None

@@ -271,23 +271,38 @@ def _hypothesis(claim: str, checks: list[tests.Check]) -> dict:
         f"{_requirements(checks)}holds: every check below testable and passed; partly: at least "
         f"{PARTLY_SHARE:.0%} of the checks passed; differs: fewer"
     )
-    testable = [check for check in checks if check.passed is not None]
     details = "\n".join(check.text for check in checks)
-    if not testable:
+    share, verdict = _verdict(checks)
+    if verdict == "not testable":
         measured = "no check could be decided" if checks else "no checks"
-        why = _not_passed(checks)
-        measured += f"; {why}" if why else ""
-        return _row(claim, criterion, measured, np.nan, "not testable", details)
-    passed = sum(bool(check.passed) for check in checks)
-    share = passed / len(checks)
-    if passed == len(checks):
-        verdict = "holds"
     else:
-        verdict = "partly" if share >= PARTLY_SHARE else "differs"
-    measured = f"{passed} of {len(checks)} checks passed ({len(testable)} decided)"
+        testable = sum(check.passed is not None for check in checks)
+        passed = sum(bool(check.passed) for check in checks)
+        measured = f"{passed} of {len(checks)} checks passed ({testable} decided)"
     why = _not_passed(checks)
     measured += f"; {why}" if why else ""
-    return _row(claim, criterion, measured, share, verdict, details)
+    row = _row(claim, criterion, measured, share, verdict, details)
+    forms = {form: [check for check in checks if check.form == form] for form in FORMS}
+    if all(forms.values()):
+        row["by_form"] = "; ".join(
+            f"{FORMS[form]}: {_verdict(mine)[1]}" for form, mine in forms.items()
+        )
+    return row
+
+
+#: The two forms of every check of H1-H3 (:class:`casa_core.stats._claim_tests.Check`).
+FORMS = {"paper": "paper form", "within": "within subjects"}
+
+
+def _verdict(checks: list[tests.Check]) -> tuple[float, str]:
+    """The share of checks passed and the verdict: holds when all pass, partly when at
+    least :data:`PARTLY_SHARE` do, not testable when none is decided."""
+    if not any(check.passed is not None for check in checks):
+        return np.nan, "not testable"
+    share = sum(bool(check.passed) for check in checks) / len(checks)
+    if share == 1.0:
+        return share, "holds"
+    return share, "partly" if share >= PARTLY_SHARE else "differs"
 
 
 def _claim_h4(stats: pd.DataFrame, likert: pd.DataFrame | None) -> dict:
@@ -328,7 +343,9 @@ def evaluate_claims(tables: Mapping[str, pd.DataFrame | None], *, epsilon: float
     Returns
     -------
     pandas.DataFrame
-        Columns :data:`CLAIM_COLUMNS`, one row per claim C1-C4 (and expert), H1-H4.
+        Columns :data:`CLAIM_COLUMNS` and ``by_form``, one row per claim C1-C4 (and
+        expert), H1-H4; ``by_form`` gives H1-H3's verdict on the checks of each form
+        alone (``paper form: differs; within subjects: partly``), empty for the others.
         ``value`` is the
         number behind the verdict (the share of trials or checks that meet the criterion;
         NaN when not testable); ``verdict`` is one of :data:`VERDICTS`
@@ -387,7 +404,9 @@ def evaluate_claims(tables: Mapping[str, pd.DataFrame | None], *, epsilon: float
         _hypothesis("H3", tests.h3_checks(stats, trials)),
         _claim_h4(stats, likert),
     ]
-    return pd.DataFrame(rows, columns=CLAIM_COLUMNS)
+    table = pd.DataFrame(rows, columns=[*CLAIM_COLUMNS, "by_form"])
+    table["by_form"] = table["by_form"].fillna("")
+    return table
 
 
 __all__ = [

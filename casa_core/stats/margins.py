@@ -2,7 +2,9 @@
 
 A margin is either absolute (in the metric's unit) or a fraction of the reference
 condition's mean in the compared cells (for metrics whose unit the paper does not give);
-either may be set for every task or per task. The values and their sources are in
+either may be set for every task or per task. Beside them, the one-sided level of the
+non-inferiority tests (the paper's 0.05; 0.025, a two-sided 95 % interval, is CONSORT's
+and the EMA's and FDA's). The values and their sources are in
 casa_core/config.schema.yaml (``statistics``).
 """
 
@@ -12,6 +14,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+
+#: The paper's one-sided level of non-inferiority (its one-sided 95 % bounds).
+PAPER_ALPHA = 0.05
 
 
 def _flat(values: Mapping, what: str) -> dict[str, float]:
@@ -44,33 +49,47 @@ class Margins:
     (0.065, 0.05)
     >>> margins.absolute_for("unknown_goal", "relative_effort") is None
     True
+    >>> margins.alpha
+    0.05
     """
 
     absolute: Mapping[str, float] = field(default_factory=dict)
     fractions: Mapping[str, float] = field(default_factory=dict)
+    #: The one-sided level of the non-inferiority tests (``noninferiority_alpha``).
+    alpha: float = PAPER_ALPHA
+
+    def __post_init__(self) -> None:
+        alpha = self.alpha
+        if isinstance(alpha, bool) or not isinstance(alpha, int | float) or not 0 < alpha < 0.5:
+            raise ValueError(f"noninferiority_alpha: a level in (0, 0.5), got {alpha!r}")
 
     @classmethod
     def from_config(cls, statistics: Mapping | None) -> Margins:
-        """From the config's ``statistics`` section (its two margin keys; others ignored)."""
+        """From the config's ``statistics`` section (margins and level; others ignored)."""
         statistics = statistics or {}
         return cls(
             absolute=_flat(statistics.get("noninferiority_margins", {}), "noninferiority_margins"),
             fractions=_flat(
                 statistics.get("noninferiority_fractions", {}), "noninferiority_fractions"
             ),
+            alpha=statistics.get("noninferiority_alpha", PAPER_ALPHA),
         )
 
     def options(self) -> list[str]:
-        """The margins as ``casa stats`` options (``--margin``, ``--margin-fraction``).
+        """The margins and level as ``casa stats`` options (``--margin``,
+        ``--margin-fraction``, ``--noninferiority-alpha``).
 
         Examples
         --------
-        >>> Margins(absolute={"known_goal:error": 0.5}, fractions={"efficiency": 0.1}).options()
-        ['--margin known_goal:error=0.5', '--margin-fraction efficiency=0.1']
+        >>> margins = Margins(absolute={"known_goal:error": 0.5}, fractions={"efficiency": 0.1})
+        >>> print(" ".join(margins.options()))
+        --margin known_goal:error=0.5 --margin-fraction efficiency=0.1 --noninferiority-alpha 0.05
         """
-        return [f"--margin {key}={value!r}" for key, value in self.absolute.items()] + [
-            f"--margin-fraction {key}={value!r}" for key, value in self.fractions.items()
-        ]
+        return (
+            [f"--margin {key}={value!r}" for key, value in self.absolute.items()]
+            + [f"--margin-fraction {key}={value!r}" for key, value in self.fractions.items()]
+            + [f"--noninferiority-alpha {self.alpha!r}"]
+        )
 
     def absolute_for(self, task: str, metric: str) -> float | None:
         return self.absolute.get(f"{task}:{metric}", self.absolute.get(metric))
@@ -99,4 +118,4 @@ def parse_margin(text: str, what: str = "--margin") -> tuple[str, float]:
     return key, number
 
 
-__all__ = ["Margins", "parse_margin"]
+__all__ = ["PAPER_ALPHA", "Margins", "parse_margin"]

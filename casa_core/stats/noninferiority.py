@@ -5,6 +5,11 @@ one-sided upper confidence bound of the difference. Given a margin the test itse
 performed. Three forms: independent samples with pooled variance (the paper's),
 independent samples with Welch's unequal-variance t, and paired by participant (the
 within-subjects design's).
+
+A margin set at a fraction ``f`` of the reference mean is itself an estimate; the ratio
+form (:func:`ratio_non_inferiority`) tests ``mu_new - (1 + f) mu_ref`` instead, with the
+reference's sampling error in the test, and bounds the ratio ``mu_new / mu_ref`` by
+Fieller's method (Laster and Johnson 2003; Hauschke et al. 1999).
 """
 
 from __future__ import annotations
@@ -189,4 +194,125 @@ def _constant_note(reference_values, reference, new) -> str:
     )
 
 
-__all__ = ["NONINFERIORITY_COLUMNS", "non_inferiority"]
+def ratio_non_inferiority(
+    data: pd.DataFrame,
+    dv: str,
+    between: str,
+    new: str,
+    reference: str,
+    *,
+    fraction: float,
+    lower_is_better: bool = True,
+    alpha: float = 0.05,
+    subject: str | None = None,
+) -> pd.DataFrame:
+    """Non-inferiority within a fraction of the reference mean: ``mu_new / mu_ref``.
+
+    For a lower-is-better metric ``new`` is non-inferior when ``mu_new < (1 + f) mu_ref``,
+    i.e. when the one-sided test of ``H0: mu_new - (1 + f) mu_ref >= 0`` rejects at
+    ``alpha``: a t-test of ``new - (1 + f) reference``, paired by ``subject`` (one-sample
+    t of the participants' differences) or, for independent samples, Welch's t of
+    ``new`` against ``(1 + f) reference``. The bound is Fieller's one-sided ``(1 - alpha)``
+    upper confidence bound of the ratio: the ratio ``r`` at which the test of ``new -
+    r reference`` has p = alpha, the smallest ratio margin at which ``new`` is
+    non-inferior. A higher-is-better metric is tested against ``1 - f``, with the lower
+    bound. Both means must be positive.
+
+    Parameters
+    ----------
+    data : pandas.DataFrame
+        One row per observation.
+    dv, between : str
+        Dependent-variable and group columns.
+    new, reference : str
+        The two levels of ``between`` compared.
+    fraction : float
+        The margin ``f > 0`` as a fraction of the reference mean.
+    lower_is_better : bool
+        Direction of the metric.
+    alpha : float
+        One-sided significance level, in (0, 1).
+    subject : str, optional
+        Column identifying participants: the paired form; without it, Welch's.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row, the columns of :func:`non_inferiority`: ``estimate`` is the ratio of
+        the means, ``bound`` Fieller's bound (infinite when the reference mean is not
+        significantly above 0), ``margin`` the ratio ``1 + f`` (``1 - f``), ``t`` and ``p``
+        the test at it, ``se`` that of ``mean(new) - margin x mean(reference)``.
+
+    Examples
+    --------
+    >>> data = pd.DataFrame({"method": ["new"] * 4 + ["old"] * 4, "s": list("abcd") * 2,
+    ...                      "error": [1.0, 1.2, 0.9, 1.1, 1.3, 1.5, 1.2, 1.4]})
+    >>> row = ratio_non_inferiority(data, "error", "method", "new", "old", fraction=0.05,
+    ...                             subject="s").iloc[0]
+    >>> print(round(row["estimate"], 3), round(row["bound"], 3), row["margin"], row["noninferior"])
+    0.778 0.8 1.05 True
+    """
+    if not 0.0 < alpha < 1.0:
+        raise ValueError(f"ratio_non_inferiority: alpha must be in (0, 1), got {alpha!r}")
+    if not (np.isfinite(fraction) and fraction > 0):
+        raise ValueError(f"ratio_non_inferiority: fraction must be positive, got {fraction!r}")
+    ratio_margin = 1.0 + fraction if lower_is_better else 1.0 - fraction
+    frame = clean(data, dv, [between] + ([subject] if subject else []), "ratio_non_inferiority")
+    known = {"new": new, "reference": reference, "margin": ratio_margin}
+    try:
+        a, b, note = _two_samples(frame, dv, between, new, reference, subject)
+        if not (np.mean(a) > 0 and np.mean(b) > 0):
+            raise Skipped("a ratio margin needs positive means of both conditions")
+    except Skipped as why:
+        return skipped_row(NONINFERIORITY_COLUMNS, str(why), **known)
+    alternative = "less" if lower_is_better else "greater"
+
+    def test(r):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            if subject:
+                return stats.ttest_1samp(a - r * b, 0.0, alternative=alternative)
+            return stats.ttest_ind(a, r * b, alternative=alternative, equal_var=False)
+
+    at_margin = test(ratio_margin)
+    estimate = float(np.mean(a) / np.mean(b))
+    bound = _fieller_bound(lambda r: float(test(r).pvalue), estimate, alpha, lower_is_better)
+    row = known | {
+        "estimate": estimate,
+        "se": float((np.mean(a) - ratio_margin * np.mean(b)) / at_margin.statistic),
+        "df": float(at_margin.df),
+        "bound": bound,
+        "t": float(at_margin.statistic),
+        "p": float(at_margin.pvalue),
+        "noninferior": bool(at_margin.pvalue < alpha),
+        "n_new": len(a),
+        "n_reference": len(b),
+        "note": note,
+    }
+    if not np.isfinite(bound):
+        unbounded = "the reference mean is not significantly above 0: Fieller's bound is unbounded"
+        row["note"] = "; ".join(x for x in (note, unbounded) if x)
+    return pd.DataFrame([row], columns=[*NONINFERIORITY_COLUMNS, "note"])
+
+
+def _fieller_bound(p_of, estimate: float, alpha: float, lower_is_better: bool) -> float:
+    """The ratio at which the one-sided test's p equals ``alpha``, found from the estimate
+    (p = 1/2) outward; infinite (lower is better) or 0 when no ratio reaches ``alpha``."""
+    from scipy.optimize import brentq
+
+    step, far = max(abs(estimate), 1.0), None
+    for _ in range(60):
+        candidate = estimate + step if lower_is_better else max(estimate - step, 0.0)
+        if p_of(candidate) < alpha:
+            far = candidate
+            break
+        if not lower_is_better and candidate == 0.0:
+            break
+        step *= 2.0
+    if far is None:
+        return float(np.inf) if lower_is_better else 0.0
+    low, high = min(estimate, far), max(estimate, far)
+    return float(brentq(lambda r: p_of(r) - alpha, low, high, xtol=1e-13))
+
+
+__all__ = ["NONINFERIORITY_COLUMNS", "non_inferiority", "ratio_non_inferiority"]

@@ -39,13 +39,24 @@ HYPOTHESES = {"H1": checks.h1_checks, "H2": checks.h2_checks, "H3": checks.h3_ch
 ANALYSES = ("paper", "within")
 #: The metrics of the hypotheses' words: "more accurate, efficient, and effortless".
 METRICS = checks.METRICS
-DETECTION_COLUMNS = ["variant", "replicate", "N", "hypothesis", "metric", "analysis", "detected"]
+#: ``noninferiority_alpha``: the one-sided level of the non-inferiority checks.
+DETECTION_COLUMNS = [
+    "variant",
+    "replicate",
+    "N",
+    "hypothesis",
+    "metric",
+    "analysis",
+    "noninferiority_alpha",
+    "detected",
+]
 POWER_COLUMNS = [
     "variant",
     "N",
     "hypothesis",
     "metric",
     "analysis",
+    "noninferiority_alpha",
     "power",
     "ci_low",
     "ci_high",
@@ -128,6 +139,7 @@ def replicate_detections(
     False
     """
     rows = []
+    alpha = (margins or Margins()).alpha
     for n in sorted(sizes):
         study = first_participants(trials, n)
         stats = analyze_study(study, margins=margins, metrics=list(METRICS))
@@ -137,7 +149,7 @@ def replicate_detections(
                 for form in ANALYSES:
                     mine = [c for c in found if c.metric == metric and c.form == form]
                     detected = bool(mine) and all(c.passed is True for c in mine)
-                    rows.append([variant, replicate, n, hypothesis, metric, form, detected])
+                    rows.append([variant, replicate, n, hypothesis, metric, form, alpha, detected])
     return pd.DataFrame(rows, columns=DETECTION_COLUMNS)
 
 
@@ -169,7 +181,8 @@ def power_table(detections: pd.DataFrame | Sequence[pd.DataFrame]) -> pd.DataFra
     -------
     pandas.DataFrame
         Columns :data:`POWER_COLUMNS`: ``power`` = detections / ``replicates``, and its
-        Wilson 95 % interval ``ci_low``, ``ci_high``. Sorted by variant (as given), N,
+        Wilson 95 % interval ``ci_low``, ``ci_high``; ``noninferiority_alpha`` is the
+        one-sided level the non-inferiority checks were run at. Sorted by variant (as given), N,
         hypothesis, metric (:data:`METRICS`' order) and analysis.
 
     Raises
@@ -180,16 +193,17 @@ def power_table(detections: pd.DataFrame | Sequence[pd.DataFrame]) -> pd.DataFra
     Examples
     --------
     >>> one = {"variant": "default", "N": 6, "hypothesis": "H3", "metric": "error",
-    ...        "analysis": "paper"}
+    ...        "analysis": "paper", "noninferiority_alpha": 0.05}
     >>> rows = pd.DataFrame([one | {"replicate": r, "detected": r <= 8} for r in range(1, 11)])
-    >>> power_table(rows).round(4)  # doctest: +NORMALIZE_WHITESPACE
+    >>> power_table(rows).drop(columns="noninferiority_alpha").round(4)
+    ... # doctest: +NORMALIZE_WHITESPACE
     variant  N hypothesis metric analysis  power  ci_low  ci_high  replicates
     0  default  6  H3  error  paper  0.8  0.4902  0.9433  10
     """
     if not isinstance(detections, pd.DataFrame):
         detections = pd.concat(list(detections), ignore_index=True)
     require_columns(detections, DETECTION_COLUMNS, "detections table")
-    keys = ["variant", "N", "hypothesis", "metric", "analysis"]
+    keys = ["variant", "N", "hypothesis", "metric", "analysis", "noninferiority_alpha"]
     twice = detections[detections.duplicated([*keys, "replicate"])]
     if not twice.empty:
         first = twice.iloc[0]

@@ -14,6 +14,7 @@ from collections.abc import Mapping
 import pandas as pd
 
 from casa_core.io.tables import require_columns
+from casa_core.stats import _claim_tests as tests
 from casa_core.stats.claims import CLAIM_COLUMNS, MODEL_OUTPUT, answered_by_model
 
 #: What each verdict means next to the paper, said under the claim.
@@ -69,6 +70,53 @@ def facts(tables: Mapping[str, pd.DataFrame | None]) -> list[str]:
     if answered_by_model(likert):
         lines.append("Likert answers: model output (simulated participants), not people's.")
     return lines
+
+
+def form_lines(claims: pd.DataFrame, stats: pd.DataFrame | None = None) -> list[str]:
+    """Per hypothesis, the verdict of the paper-form checks beside the within-subjects
+    ones (``by_form`` of :func:`casa_core.stats.claims.evaluate_claims`), and the level
+    of the non-inferiority tests.
+
+    Examples
+    --------
+    >>> claims = pd.DataFrame({"claim": ["H1"], "verdict": ["partly"],
+    ...                        "by_form": ["paper form: differs; within subjects: holds"]})
+    >>> print("\\n".join(form_lines(claims)))
+    <BLANKLINE>
+    | Hypothesis | Verdict | Paper form | Within subjects |
+    | --- | --- | --- | --- |
+    | H1 | partly | differs | holds |
+    """
+    if "by_form" not in claims.columns:
+        return []
+    lines = []
+    for row in claims.itertuples():
+        forms = dict(part.split(": ", 1) for part in str(row.by_form).split("; ") if ": " in part)
+        if forms:
+            lines.append(
+                f"| {row.claim} | {row.verdict} | {forms.get('paper form', '')} | "
+                f"{forms.get('within subjects', '')} |"
+            )
+    if not lines:
+        return []
+    head = [
+        "",
+        "| Hypothesis | Verdict | Paper form | Within subjects |",
+        "| --- | --- | --- | --- |",
+    ]
+    tail = []
+    if stats is not None and "analysis" in stats.columns:
+        tail = [
+            "",
+            "Paper form: each participant-condition an independent observation, as the paper "
+            "ran it; within subjects: the repeated-measures ANOVA and paired non-inferiority "
+            "(a ratio test where the margin is a fraction of the reference mean). Where the "
+            "pooled tasks' method x task interaction is significant, H2's and H3's "
+            "superiority is judged per task (the simple effects of method; the per-task rows "
+            "of stats.csv). Non-inferiority is tested at the "
+            f"{tests.level_words(stats)} level (statistics.noninferiority_alpha).",
+        ]
+    return head + lines + tail
 
 
 def _cell(text) -> str:
@@ -175,6 +223,7 @@ def results_markdown(
     ]
     for row in claims.itertuples():
         lines.append(f"| {row.claim} | {row.verdict} | {_cell(row.measured)} |")
+    lines += form_lines(claims, tables.get("stats"))
     for row in claims.itertuples():
         lines += [
             "",

@@ -21,8 +21,8 @@ import pandas as pd
 
 from casa_core.io.contract import CONDITION_KEYS, SURVEY_COLUMNS
 from casa_core.io.tables import numeric_column, require_columns
-from casa_core.stats import between, posthoc, within
-from casa_core.stats._rows import STATS_COLUMNS, Rows
+from casa_core.stats import between, noninferiority, posthoc, within
+from casa_core.stats._rows import LEVEL_NOTE, STATS_COLUMNS, Rows
 from casa_core.stats.margins import Margins
 from casa_core.vocabulary import (
     ANSWERED_BY,
@@ -192,6 +192,8 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
     if noninf is not None:
         new, reference = noninf
         margin, why = _margin(margins, data, task_label, metric, reference)
+        alpha = margins.alpha if margins is not None else ALPHA
+        level = LEVEL_NOTE.format(alpha)
         # The paper's pooled test first: stats.claims reads the first independent row.
         for paired, welch in ((False, False), (False, True), (True, False)):
             table = between.non_inferiority(
@@ -201,12 +203,31 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
                 new,
                 reference,
                 lower_is_better=True,
-                alpha=ALPHA,
+                alpha=alpha,
                 margin=margin,
                 subject="participant" if paired else None,
                 welch=welch,
             )
-            out.noninferiority(key | {"analysis": "noninferiority"}, table, paired, welch, why)
+            extra = "; ".join(x for x in (why, level) if x)
+            out.noninferiority(key | {"analysis": "noninferiority"}, table, paired, welch, extra)
+        fraction = margins.fraction_for(task_label, metric) if why else None
+        if fraction is not None:
+            # The margin is a fraction of an estimated mean: the ratio form counts its error.
+            for paired in (False, True):
+                table = noninferiority.ratio_non_inferiority(
+                    data,
+                    metric,
+                    "method",
+                    new,
+                    reference,
+                    fraction=fraction,
+                    alpha=alpha,
+                    subject="participant" if paired else None,
+                )
+                ratio = f"ratio margin 1 + {fraction:g}, Fieller bound; {level}"
+                out.noninferiority(
+                    key | {"analysis": "noninferiority_ratio"}, table, paired, not paired, ratio
+                )
 
 
 def _within_rows(out, key, metric, data, covariate) -> None:
@@ -215,12 +236,11 @@ def _within_rows(out, key, metric, data, covariate) -> None:
     out.repeated(
         key | {"analysis": "rm_anova"}, within.rm_anova(data, metric, factors, "participant")
     )
-    out.terms(
-        key | {"analysis": "mixedlm"},
-        within.mixedlm(data, metric, factors, "participant"),
-        "chi2",
-        "none",
-    )
+    mixed = within.mixedlm(data, metric, factors, "participant")
+    out.terms(key | {"analysis": "mixedlm"}, mixed, "F", "none")
+    # The likelihood ratio of the same model, beside the reported small-sample F.
+    lrt = mixed.drop(columns=["df1", "df2", "p"]).rename(columns={"lrt_df": "df1", "p_lrt": "p"})
+    out.terms(key | {"analysis": "mixedlm_lrt"}, lrt, "chi2", "none")
 
 
 def analyze_study(
@@ -251,12 +271,17 @@ def analyze_study(
     -------
     pandas.DataFrame
         The stats.csv table, columns :data:`STATS_COLUMNS`.  ``statistic`` is F (anova,
-        ancova, rm_anova), the likelihood-ratio chi-square (mixedlm), t (tukey rows of the
+        ancova, rm_anova), the Kenward-Roger F (mixedlm), the likelihood-ratio chi-square
+        (mixedlm_lrt), t (tukey rows of the
         pooled tasks, from the ANCOVA model), t at the margin (noninferiority),
         Friedman's chi-square (friedman) or V (wilcoxon); ``effect_size`` is partial eta
         squared (anova, ancova), generalized eta squared (rm_anova), Kendall's W (friedman)
         or the rank-biserial correlation (wilcoxon); on non-inferiority rows ``ci_high`` is
-        the one-sided 95 % upper bound of ``estimate = mean(CASA) - mean(reference)``.
+        the one-sided upper bound of ``estimate = mean(CASA) - mean(reference)`` at the
+        margins' level (``Margins.alpha``, named in the note; the paper's 95 %); on
+        ``noninferiority_ratio`` rows (a margin that is a fraction f of the reference
+        mean) ``estimate`` is the ratio of the means, ``ci_high`` Fieller's bound and
+        ``margin`` 1 + f, in Welch's and the paired form.
         Skipped tests keep their row with NaN statistics and the reason in ``note``.
 
     Raises
@@ -284,8 +309,9 @@ def analyze_study(
     --------
     Four participants of the Known Goal task; the other hypotheses keep skipped rows.
     The repeated-measures row is Greenhouse-Geisser corrected (df times epsilon); the
-    non-inferiority rows are the independent (paper, pooled variance) test, Welch's, then
-    the paired one.
+    mixed model's Kenward-Roger F is the uncorrected repeated-measures F, its likelihood
+    ratio beside it; the non-inferiority rows are the independent (paper, pooled
+    variance) test, Welch's, then the paired one.
 
     >>> errors = {"NA": [3.0, 3.4, 2.9, 3.7], "PBA": [2.1, 2.6, 2.4, 2.3],
     ...           "CASA": [1.2, 1.9, 1.4, 1.3]}
@@ -302,10 +328,11 @@ def analyze_study(
     2           tukey  CASA vs PBA        NaN   NaN   NaN      -0.9
     3           tukey    NA vs PBA        NaN   NaN   NaN       0.9
     4        rm_anova                   57.18  1.16  3.49       NaN
-    5         mixedlm                   27.72  2.00   NaN       NaN
-    6  noninferiority  CASA vs PBA        NaN  6.00   NaN      -0.9
-    7  noninferiority  CASA vs PBA        NaN  5.24   NaN      -0.9
-    8  noninferiority  CASA vs PBA        NaN  3.00   NaN      -0.9
+    5         mixedlm                   57.18  2.00  6.00       NaN
+    6     mixedlm_lrt                   27.72  2.00   NaN       NaN
+    7  noninferiority  CASA vs PBA        NaN  6.00   NaN      -0.9
+    8  noninferiority  CASA vs PBA        NaN  5.24   NaN      -0.9
+    9  noninferiority  CASA vs PBA        NaN  3.00   NaN      -0.9
     >>> print(table[table["hypothesis"] == "H3"]["note"].iloc[0])  # doctest: +ELLIPSIS
     no trials of unknown_goal+unknown_skill in conditions CASA after learning, NA; ...
     """

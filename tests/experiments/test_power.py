@@ -181,7 +181,14 @@ def test_the_wilson_interval_is_the_closed_form():
 
 
 def detections(variant, n, hits, total) -> pd.DataFrame:
-    key = dict(variant=variant, N=n, hypothesis="H1", metric="error", analysis="paper")
+    key = dict(
+        variant=variant,
+        N=n,
+        hypothesis="H1",
+        metric="error",
+        analysis="paper",
+        noninferiority_alpha=0.05,
+    )
     rows = [key | {"replicate": r, "detected": r <= hits} for r in range(1, total + 1)]
     return pd.DataFrame(rows)
 
@@ -248,7 +255,8 @@ def test_the_figure_has_a_panel_per_hypothesis_and_metric():
             for analysis in ("paper", "within"):
                 for n in (6, 11):
                     rows.append(dict(variant="default", N=n, hypothesis=hypothesis,
-                                     metric=metric, analysis=analysis, power=0.5,
+                                     metric=metric, analysis=analysis,
+                                     noninferiority_alpha=0.05, power=0.5,
                                      ci_low=0.3, ci_high=0.7, replicates=20))  # fmt: skip
     fig = power_figure(pd.DataFrame(rows))
     assert len(fig.axes_by_name) == 9
@@ -265,7 +273,8 @@ def test_the_figure_command_names_the_configuration_that_built_the_table(tmp_pat
 
     effective, digest = write_effective_config(tmp_path)
     rows = [dict(variant="default", N=n, hypothesis="H1", metric="error", analysis="paper",
-                 power=0.5, ci_low=0.3, ci_high=0.7, replicates=2) for n in (2, 3)]  # fmt: skip
+                 noninferiority_alpha=0.05, power=0.5, ci_low=0.3, ci_high=0.7,
+                 replicates=2) for n in (2, 3)]  # fmt: skip
     write_csv(tmp_path / "power.csv", pd.DataFrame(rows))
     drawn = []
     monkeypatch.setattr(style, "save_figure", lambda fig, prefix: drawn.append(fig) or [prefix])

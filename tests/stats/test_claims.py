@@ -499,3 +499,38 @@ def test_default_target_builds_results_md_for_every_dataset(tmp_path):
         (False, False),
         (True, True),
     ]
+
+
+def test_a_significant_interaction_judges_h3_per_task_and_results_md_says_so():
+    # The pooled tests pass on every metric, but on error method x task is significant
+    # in the paper's form (ancova) and CASA after learning is lower on Unknown Goal only:
+    # the error check is then one per task, and Unknown Skill's fails (not significant).
+    table, trials = h3_tables(dict.fromkeys(checks.METRICS, 0.01))
+    pooled = "+".join(UNKNOWN)
+    extra = [
+        stats_row("H3", "ancova", pooled, "error", 0.001, term="method x task"),
+        stats_row("H3", "anova", "unknown_goal", "error", 0.01),
+        stats_row("H3", "anova", "unknown_skill", "error", 0.4),
+    ]
+    table = pd.concat([table, pd.DataFrame(extra, columns=STATS_COLUMNS)], ignore_index=True)
+    row = judge(known_goal_steps(1, 1), stats_table=table, trials=trials).loc["H3"]
+    lines = row["details"].splitlines()
+    assert len(lines) == 7  # error's paper check is one per task
+    assert any(
+        "error (paper): ancova method x task p = .001, so Unknown Goal, anova p = .010" in line
+        and line.endswith(": pass")
+        for line in lines
+    )
+    skill = [line for line in lines if "so Unknown Skill" in line]
+    assert len(skill) == 1 and "fail" in skill[0] and "anova p = .400" in skill[0]
+    assert row["by_form"] == "paper form: partly; within subjects: holds"
+    text = results_markdown(
+        claims.evaluate_claims(
+            {"trials": trials, "steps": known_goal_steps(1, 1), "stats": table}, epsilon=EPSILON
+        ),
+        {"trials": trials, "stats": table},
+        dataset="x",
+    )
+    assert "| H3 | partly | partly | holds |" in text
+    assert "superiority is judged per task" in text
+    assert "one-sided 95% level" in text

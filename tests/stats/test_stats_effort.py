@@ -57,7 +57,7 @@ def test_one_sample_against_na_welch_df(trials):
 
 def test_log_effort_rows_are_within_subjects_only(trials, table):
     rows = table[table["metric"] == LOG_EFFORT]
-    assert set(rows["analysis"]) == {"rm_anova", "mixedlm"}
+    assert set(rows["analysis"]) == {"rm_anova", "mixedlm", "mixedlm_lrt"}
     assert set(rows["hypothesis"]) == {"H1", "H2", "H3"}
     # By construction: the H1 row is rm_anova on log(effort + 1) of each trial.
     direct = rm_anova(

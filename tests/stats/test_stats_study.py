@@ -8,6 +8,7 @@ import pytest
 
 from casa_core import cli
 from casa_core.stats import STATS_COLUMNS, analyze_study, anova, apa, report_markdown
+from casa_core.stats.margins import Margins
 from casa_core.stats.study import CONDITION_ORDER
 from casa_core.vocabulary import condition_of
 
@@ -16,8 +17,10 @@ ANALYSES = {
     "ancova",
     "tukey",
     "noninferiority",
+    "noninferiority_ratio",
     "rm_anova",
     "mixedlm",
+    "mixedlm_lrt",
     "friedman",
     "wilcoxon",
 }
@@ -117,7 +120,9 @@ def likert() -> pd.DataFrame:
 
 @pytest.fixture(scope="module")
 def table(trials, likert) -> pd.DataFrame:
-    return analyze_study(trials, likert, margins={"error": 1.0})
+    # An absolute margin and a fraction of the reference mean: both non-inferiority forms.
+    margins = Margins(absolute={"error": 1.0}, fractions={"relative_effort": 0.1})
+    return analyze_study(trials, likert, margins=margins)
 
 
 def _rows(table, **where) -> pd.DataFrame:
@@ -237,6 +242,11 @@ def test_noninferiority_rows(table):
     # Without a margin (efficiency), only the bound.
     rows = _rows(table, hypothesis="H1", analysis="noninferiority", metric="efficiency")
     assert rows["p"].isna().all() and rows["noninferior"].isna().all()
+    # A fractional margin (relative effort) adds the ratio test, Welch's and paired.
+    ratio = _rows(table, hypothesis="H1", analysis="noninferiority_ratio", metric="relative_effort")
+    assert len(ratio) == 2 and ratio["note"].str.contains("paired").sum() == 1
+    assert (ratio["margin"] == 1.1).all() and ratio["note"].str.contains("level 0.05").all()
+    assert not _rows(table, analysis="noninferiority_ratio", metric="error").shape[0]
 
 
 def test_likert_rows(table):

@@ -170,41 +170,42 @@ def test_rm_anova_accepts_a_dv_named_like_a_condition():
 # ------------------------------------------------------------------------ mixed model
 
 
-def test_mixedlm_likelihood_ratio_closed_form_on_sleep(sleep):
-    # Balanced, two conditions, a random intercept away from the boundary: the ML
+def test_mixedlm_closed_forms_on_sleep(sleep):
+    # Balanced, two conditions, a random intercept away from the boundary: the
+    # Kenward-Roger F is the paired t squared on n - 1 = 9 degrees of freedom, and the ML
     # likelihood factors into the participants' means (which the condition does not
     # change) and their 10 paired differences d ~ N(delta, 2 sigma^2), so the likelihood
     # ratio is n ln(sum d^2 / sum (d - mean d)^2) = n ln(1 + t^2 / (n - 1)), with R's
-    # paired t = 4.0621 (R ?sleep; printed to 5 digits: rel 5e-5).
+    # paired t = 4.0621 (R ?sleep; printed to 5 digits: rel 5e-5, 1e-4 for its square).
     row = mixedlm(sleep, "extra", "group", "ID").iloc[0]
-    assert row["df1"] == 1 and row["n"] == 20 and row["n_groups"] == 10
+    assert row["n"] == 20 and row["n_groups"] == 10
+    assert (row["df1"], row["df2"]) == (1, pytest.approx(9, rel=1e-6))
+    assert row["F"] == pytest.approx(4.0621**2, rel=1e-4)
+    assert row["p"] == pytest.approx(0.002833, rel=1e-3)  # R's paired t-test
+    assert row["lrt_df"] == 1
     assert row["chi2"] == pytest.approx(10 * np.log(1 + 4.0621**2 / 9), rel=5e-5)
-    assert row["p"] == pytest.approx(stats.chi2.sf(row["chi2"], 1))
-    assert "likelihood ratio, ML fits" in row["note"] and "boundary" not in row["note"]
+    assert row["p_lrt"] == pytest.approx(stats.chi2.sf(row["chi2"], 1))
+    assert "Kenward-Roger" in row["note"] and "boundary" not in row["note"]
 
 
-def test_mixedlm_likelihood_ratio_closed_form_two_way(two_way):
-    # The same factoring on the balanced 2 x 3 design with 10 subjects: the within-subject
-    # contrasts are 10 x (6 - 1) = 50 observations of an ordinary linear model, so each
-    # term's likelihood ratio is 50 ln(RSS without / RSS with), RSS from OLS with subject
-    # blocks (statsmodels OLS, an independent fit); type II: main effects in the additive
-    # model, the interaction against it.
-    import statsmodels.formula.api as smf
-
-    def rss(formula):
-        return smf.ols(f"Performance ~ C(Subject) + {formula}", two_way).fit().ssr
-
-    additive = rss("C(Time) + C(Metric)")
-    expected = {
-        "Time": (50 * np.log(rss("C(Metric)") / additive), 1),
-        "Metric": (50 * np.log(rss("C(Time)") / additive), 2),
-        "Time x Metric": (50 * np.log(additive / rss("C(Time) * C(Metric)")), 2),
-    }
+def test_mixedlm_is_the_rm_anova_on_a_balanced_design(two_way):
+    # Balanced 2 x 3 fully within design, every variance component positive: with random
+    # intercepts per subject, subject x Time and subject x Metric the model has the
+    # error strata of the repeated-measures ANOVA, and the Kenward-Roger F of each term
+    # is the uncorrected repeated-measures F on its stratum's degrees of freedom
+    # (pingouin, an independent implementation).
     ours = mixedlm(two_way, "Performance", ["Time", "Metric"], "Subject").set_index("term")
-    assert list(ours.index) == list(expected)
-    for term, (chi2, df) in expected.items():
-        assert ours.loc[term, "df1"] == df
-        assert ours.loc[term, "chi2"] == pytest.approx(chi2, rel=1e-4)  # optimiser tolerance
+    assert list(ours.index) == ["Time", "Metric", "Time x Metric"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        anova = pingouin.rm_anova(
+            two_way, dv="Performance", within=["Time", "Metric"], subject="Subject"
+        )
+    for term, line in zip(ours.index, anova.itertuples(), strict=True):
+        assert ours.loc[term, "F"] == pytest.approx(line.F, rel=1e-5), term
+        assert ours.loc[term, "df1"] == line.ddof1
+        assert ours.loc[term, "df2"] == pytest.approx(line.ddof2, rel=1e-6), term
+    assert "boundary" not in ours["note"].iloc[0]
     additive_only = mixedlm(
         two_way, "Performance", ["Time", "Metric"], "Subject", interaction=False
     )
