@@ -14,9 +14,15 @@ writer, its validation and the one atomic writer; ``metrics`` and ``datasets``
 turn logs into tables (``tasks``: what each task intends), which ``stats/`` and
 ``figures/`` take; the study's names are in ``vocabulary``, the task scene in
 ``scene``, the workflow config's loader in ``config``; ``bench`` times the package
-and ``cli/`` is the ``casa`` command. Imports run one way: equations <- intents,
+and ``cli/`` is the ``casa`` command; ``numerics`` caps the libraries' CPU code paths
+so results are the same on every x86-64 machine. Imports run one way: equations <- intents,
 assistant <- planning <- learning <- study. The paper's symbols are mapped to
 functions in docs/paper-to-code.md, our departures from it in docs/departures.md.
 """
+
+# Before numpy, torch or numba load: their code paths are chosen then (numerics.py).
+from casa_core import numerics as _numerics
+
+_numerics.pin_environment()
 
 __version__ = "0.1.0"

@@ -1,5 +1,8 @@
 """Fixtures shared by the test folders."""
 
+# casa_core first: it sets the libraries' CPU switches before numpy loads (numerics.py).
+import casa_core  # noqa: F401  isort: skip
+
 import pytest
 
 from casa_core.scene import load_scene

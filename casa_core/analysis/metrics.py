@@ -60,6 +60,7 @@ import numpy as np
 import pandas as pd
 
 from casa_core.defaults import POUR_TILT_TOLERANCE, SUCCESS_RADIUS
+from casa_core.fixed_order import length
 from casa_core.vocabulary import PHASES, condition_of
 
 #: The condition whose effort is the reference of relative effort, and its method.
@@ -257,7 +258,7 @@ def task_success(executed: np.ndarray, intended: np.ndarray) -> bool:
     reference = np.asarray(intended, dtype=float)
     target = reference[-1, 1:]
     # Tiny tolerances: a trial ending on the boundary counts, despite rounding.
-    close = bool(np.linalg.norm(end[:3] - target[:3]) <= SUCCESS_RADIUS + 1e-12)
+    close = bool(length(end[:3] - target[:3]) <= SUCCESS_RADIUS + 1e-12)
     if reference[-1, 4] == reference[0, 4]:
         return close
     return close and bool(abs(end[3] - target[3]) <= POUR_TILT_TOLERANCE + 1e-12)

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from casa_core.defaults import COST_PER_METRE, EPSILON, LAM, PBA_DISTANCE
+from casa_core.fixed_order import length
 
 #: The pose penalty per metre that the original added to every prefix cost.
 POSE_PENALTY = 100.0
@@ -72,7 +73,7 @@ def original_step(waypoints: np.ndarray, goals: np.ndarray, arbitration: str) ->
     """
     i = len(waypoints) - 1
     current = waypoints[-1]
-    prefix = COST_PER_METRE * _length(waypoints) + POSE_PENALTY * np.linalg.norm(current - goals[0])
+    prefix = COST_PER_METRE * _length(waypoints) + POSE_PENALTY * length(current - goals[0])
     to_go = COST_PER_METRE * np.linalg.norm(goals - current, axis=1)
     optimal = COST_PER_METRE * np.linalg.norm(goals - waypoints[0], axis=1)
     subopt = (prefix + to_go - optimal) / SUBOPT_DIVISOR
@@ -88,7 +89,7 @@ def original_step(waypoints: np.ndarray, goals: np.ndarray, arbitration: str) ->
         with np.errstate(divide="ignore"):
             alpha = float(np.clip(1.0 / beta[star], 0.0, 1.0))
     elif arbitration == "distance":
-        alpha = float(np.clip(np.linalg.norm(current - goals[star]) / PBA_DISTANCE, 0.0, 1.0))
+        alpha = float(np.clip(length(current - goals[star]) / PBA_DISTANCE, 0.0, 1.0))
     return OriginalStep(subopt, beta, belief, star, alpha)
 
 

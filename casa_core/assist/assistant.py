@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from casa_core.assist.intents import length
 from casa_core.defaults import (
     DT,
     EPSILON,
@@ -38,6 +37,7 @@ from casa_core.defaults import (
     TICK,
     K,
 )
+from casa_core.fixed_order import length
 from casa_core.model._checks import require_positive
 from casa_core.model.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance, blend
 from casa_core.model.confidence import _beta_hat, _suboptimality

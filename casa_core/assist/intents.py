@@ -11,30 +11,15 @@ that the robot assists along.
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 
 import numpy as np
 
 from casa_core.defaults import COST_PER_METRE, DT, SPEED
+from casa_core.fixed_order import length
 from casa_core.model._checks import require_positive
 
 COST_FORMS = ("path_length", "distance_sum")
-
-
-def length(vector: np.ndarray) -> float:
-    """Euclidean length of a 1-D float array.
-
-    ``math.hypot`` of its entries: the same bits on every CPU, where
-    ``numpy.linalg.norm`` and ``vector.dot`` call the BLAS, whose kernel (and so the
-    last bit) depends on the processor (docs/reproducibility.md).
-
-    Examples
-    --------
-    >>> length(np.array([0.3, 0.4, 0.0]))
-    0.5
-    """
-    return math.hypot(*vector.tolist())
 
 
 class Intent(ABC):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from casa_core.fixed_order import length
 from casa_core.scene import Scene
 from casa_core.vocabulary import TASKS
 
@@ -62,9 +63,7 @@ def intended_trajectory(task: str, scene: Scene, dt: float | None = None) -> np.
     waypoints = task_waypoints(task, scene)
     times = [0.0]
     for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
-        duration = max(
-            np.linalg.norm(b[:3] - a[:3]) / teleop.speed, abs(b[3] - a[3]) / teleop.rot_speed
-        )
+        duration = max(length(b[:3] - a[:3]) / teleop.speed, abs(b[3] - a[3]) / teleop.rot_speed)
         times.append(times[-1] + duration)
     t = np.arange(0.0, times[-1], dt)
     t = np.append(t, times[-1])

@@ -192,6 +192,24 @@ def nonnegative_float(text: str) -> float:
     return _number(text, 0.0, strict=False)
 
 
+def one_sided_level(text: str) -> float:
+    """An argparse ``type``: a one-sided significance level, a number in (0, 0.5).
+
+    Examples
+    --------
+    >>> one_sided_level("0.025")
+    0.025
+    >>> one_sided_level("0.5")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: must be a number in (0, 0.5), got '0.5'
+    """
+    value = _number(text, 0.0, strict=True)
+    if not value < 0.5:
+        raise argparse.ArgumentTypeError(f"must be a number in (0, 0.5), got {text!r}")
+    return value
+
+
 def _number(text: str, low: float, *, strict: bool) -> float:
     try:
         value = float(text)

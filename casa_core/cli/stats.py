@@ -7,7 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from casa_core.cli._errors import cannot_write
-from casa_core.cli._options import example
+from casa_core.cli._options import example, one_sided_level
 from casa_core.cli._workflow import add_config_option, load_workflow_config
 from casa_core.io import read_table
 
@@ -51,7 +51,7 @@ def register(commands) -> None:
     )
     command.add_argument(
         "--noninferiority-alpha",
-        type=float,
+        type=one_sided_level,
         metavar="LEVEL",
         help="the one-sided level of the non-inferiority tests (default: the config's "
         "statistics.noninferiority_alpha, the paper's 0.05)",

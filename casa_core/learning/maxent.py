@@ -29,6 +29,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import torch
 
+from casa_core.fixed_order import length
 from casa_core.learning.adam import Adam
 from casa_core.learning.config import IRLConfig
 from casa_core.learning.demonstrations import demo_steps, demo_waypoints
@@ -389,7 +390,7 @@ def _verified_choice(candidates, history, network, per_state, demo_states, waypo
             offset = float(per_state(seen).min())
         intent, factor = build(copy.deepcopy(network), offset)
         end = intent.optimal_trajectory(start, intent.planner.horizon)[-1]
-        match = float(end_match(np.linalg.norm(end[:3] - mean_end[:3]), abs(end[3] - mean_end[3])))
+        match = float(end_match(length(end[:3] - mean_end[:3]), abs(end[3] - mean_end[3])))
         history[iteration - 1]["verified_match"] = match
         if best is None or match < best[0]:
             best = (match, iteration, intent, factor)

@@ -15,6 +15,7 @@ import numpy as np
 import torch
 
 from casa_core.assist.intents import Intent
+from casa_core.fixed_order import length
 from casa_core.planning.optimizer import Plan, PlannerConfig, optimize, steps_left, warm_start_from
 
 
@@ -189,4 +190,4 @@ class PlannedIntent(Intent):
         plan = max(plans, key=lambda p: p.states.shape[1]) if plans else None
         if plan is None:
             plan = self.plan(state, self.planner.horizon)
-        return float(np.linalg.norm(plan.states[0, -1, :3] - state[:3]))
+        return length(plan.states[0, -1, :3] - state[:3])

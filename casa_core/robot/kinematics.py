@@ -41,6 +41,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from casa_core.fixed_order import matmul, solve_spd
+
 #: Joint origins parent -> child, ``(xyz [m], rpy [rad])``, the original's. The first
 #: seven are the revolute arm joints 1..7, the last is the fixed joint to the tool.
 JOINT_ORIGINS: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...] = (
@@ -90,7 +92,7 @@ def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
     rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
     ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
     rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return rz @ ry @ rx
+    return matmul(matmul(rz, ry), rx)
 
 
 def rot_z(angle: float) -> np.ndarray:
@@ -136,9 +138,9 @@ def link_frames(q) -> np.ndarray:
     for i in range(N_JOINTS):
         turn = np.eye(4)
         turn[:3, :3] = rot_z(q[i])
-        current = current @ _ORIGINS[i] @ turn
+        current = matmul(matmul(current, _ORIGINS[i]), turn)
         frames[i] = current
-    frames[7] = current @ _ORIGINS[7]
+    frames[7] = matmul(current, _ORIGINS[7])
     return frames
 
 
@@ -170,7 +172,7 @@ def jacobian(q) -> np.ndarray:
 
 def ee_rotation(rot: float) -> np.ndarray:
     """Orientation ``(3, 3)`` of the tool for the state angle ``rot`` (see module docs)."""
-    return EE_ROTATION_AT_ZERO @ rot_z(rot)
+    return matmul(EE_ROTATION_AT_ZERO, rot_z(rot))
 
 
 def rot_of(rotation: np.ndarray) -> float:
@@ -179,13 +181,13 @@ def rot_of(rotation: np.ndarray) -> float:
     Only the turn about the tool's z axis counts; a small tilt of that axis (tracking
     error) leaves it nearly unchanged.
     """
-    relative = EE_ROTATION_AT_ZERO.T @ rotation
+    relative = matmul(EE_ROTATION_AT_ZERO.T, rotation)
     return float(np.arctan2(relative[1, 0], relative[0, 0]))
 
 
 def orientation_error(target: np.ndarray, current: np.ndarray) -> np.ndarray:
     """Rotation vector (base frame) that turns ``current`` into ``target``, for small errors."""
-    delta = target @ current.T
+    delta = matmul(target, current.T)
     return 0.5 * np.array(
         [delta[2, 1] - delta[1, 2], delta[0, 2] - delta[2, 0], delta[1, 0] - delta[0, 1]]
     )
@@ -193,8 +195,8 @@ def orientation_error(target: np.ndarray, current: np.ndarray) -> np.ndarray:
 
 def damped_least_squares(jac: np.ndarray, twist: np.ndarray, damping: float) -> np.ndarray:
     """Joint velocities ``J^T (J J^T + damping^2 I)^-1 twist``: stable near singularities."""
-    jjt = jac @ jac.T
-    return jac.T @ np.linalg.solve(jjt + damping**2 * np.eye(jjt.shape[0]), twist)
+    jjt = matmul(jac, jac.T)
+    return matmul(jac.T, solve_spd(jjt + damping**2 * np.eye(jjt.shape[0]), twist))
 
 
 def within_limits(q, margin: float = 0.0) -> bool:

@@ -17,6 +17,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from casa_core.assist.tasks import intended_trajectory
+from casa_core.fixed_order import length, matmul
 from casa_core.robot.kinematics import ee_rotation
 from casa_core.robot.scene import BOWL_RADIUS, COLORS, bowl_height
 from casa_core.scene import Scene
@@ -44,20 +45,20 @@ def _segment(client: int, a: np.ndarray, b: np.ndarray, rgba, radius: float = TU
     import pybullet as p
 
     axis = b - a
-    length = float(np.linalg.norm(axis))
-    if length < 1e-6:
+    size = length(axis)
+    if size < 1e-6:
         return
-    z = axis / length
+    z = axis / size
     # Rotation taking local z to the segment's direction: about z x axis by the angle.
     cross = np.cross([0.0, 0.0, 1.0], z)
-    sin, cos = float(np.linalg.norm(cross)), float(z[2])
+    sin, cos = length(cross), float(z[2])
     if sin < 1e-9:
         quaternion = (0.0, 0.0, 0.0, 1.0) if cos > 0 else (1.0, 0.0, 0.0, 0.0)
     else:
         half = np.arctan2(sin, cos) / 2
         quaternion = (*(np.sin(half) * cross / sin), np.cos(half))
     shape = p.createVisualShape(
-        p.GEOM_CYLINDER, radius=radius, length=length, rgbaColor=rgba, physicsClientId=client
+        p.GEOM_CYLINDER, radius=radius, length=size, rgbaColor=rgba, physicsClientId=client
     )
     p.createMultiBody(
         baseMass=0,
@@ -79,11 +80,11 @@ def _cup(client: int, position, rot: float, rgba) -> None:
 def _plumb_line(client: int, top, bottom) -> None:
     """A dashed vertical line from ``top`` down to ``bottom``."""
     top, bottom = np.asarray(top, dtype=float), np.asarray(bottom, dtype=float)
-    length = float(np.linalg.norm(top - bottom))
-    direction = (bottom - top) / length if length > 0 else np.zeros(3)
+    size = length(top - bottom)
+    direction = (bottom - top) / size if size > 0 else np.zeros(3)
     start = 0.0
-    while start < length:
-        end = min(start + DASH, length)
+    while start < size:
+        end = min(start + DASH, size)
         _segment(client, top + start * direction, top + end * direction, PLUMB_RGBA, radius=0.003)
         start = end + GAP
 
@@ -135,10 +136,10 @@ def scene_landmarks(
     """
     view, projection = _camera(width, height)
     # pybullet's matrices are column-major: transpose to act on column vectors.
-    to_clip = np.asarray(projection).reshape(4, 4).T @ np.asarray(view).reshape(4, 4).T
+    to_clip = matmul(np.asarray(projection).reshape(4, 4).T, np.asarray(view).reshape(4, 4).T)
     out = {}
     for name, point in landmark_positions(scene).items():
-        clip = to_clip @ np.r_[point, 1.0]
+        clip = matmul(to_clip, np.r_[point, 1.0])
         x, y = clip[:2] / clip[3]
         out[name] = (float((x + 1) / 2 * width), float((1 - y) / 2 * height))
     return out

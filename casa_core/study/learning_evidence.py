@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from casa_core.fixed_order import length
 from casa_core.planning import PlannedIntent
 from casa_core.planning.pouring import cup_tilt_deg
 from casa_core.scene import Scene
@@ -61,6 +62,6 @@ def learning_evidence(intent: PlannedIntent, demos) -> dict:
     end = np.mean([d[-1, 1:4] for d in demos], axis=0)
     trajectory = intent.optimal_trajectory(start, intent.planner.horizon)
     return {
-        "endpoint_error_m": float(np.linalg.norm(trajectory[-1, :3] - end)),
+        "endpoint_error_m": length(trajectory[-1, :3] - end),
         "final_tilt_deg": float(cup_tilt_deg(trajectory[-1, 3])),
     }

@@ -31,6 +31,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from casa_core.fixed_order import dot, length
 from casa_core.robot.keys import AXIS_KEYS
 from casa_core.study import _operator_kernels as _kernels
 from casa_core.study.path_geometry import unit_tangents
@@ -182,7 +183,7 @@ class SimulatedParticipant:
         final = self.reference[-1]
         return bool(
             ahead >= len(self.reference) - 1
-            and np.linalg.norm(perceived[:3] - final[:3]) < self.params.deadband
+            and length(perceived[:3] - final[:3]) < self.params.deadband
             and abs(perceived[3] - final[3]) < DONE_ROT_TOLERANCE
         )
 
@@ -264,7 +265,7 @@ class PredictiveParticipant(SimulatedParticipant):
             self._scaled, _SCALE, perceived, self._velocity, horizon, start, stop
         )
         tangent = self._tangents[nearest]
-        along = float(offset @ tangent)
+        along = dot(offset, tangent)
         wanted = min(int(self._times.searchsorted(self._times[start] + horizon)), last)
         behind = self._arc[wanted] - (self._arc[nearest] + along)
         threshold = self.params.deadband
@@ -277,7 +278,7 @@ class PredictiveParticipant(SimulatedParticipant):
         correction = _kernels.correction(offset, tangent, along, behind, self._pushing)
         if not self._pushing and wanted == last:
             # Past the end now (not just predicted to arrive): back to the end.
-            beyond = float((here - self._scaled[last]) @ self._tangents[last])
+            beyond = dot(here - self._scaled[last], self._tangents[last])
             if beyond > self.params.deadband:
                 correction -= beyond * self._tangents[last]
         return correction / _SCALE

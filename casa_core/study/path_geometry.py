@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from casa_core.fixed_order import length
+
 
 def unit_tangents(path: np.ndarray) -> np.ndarray:
     """Unit direction of travel at each sample; a sample that does not move keeps the last.
@@ -17,12 +19,12 @@ def unit_tangents(path: np.ndarray) -> np.ndarray:
     tangents = np.zeros_like(path)
     direction = np.zeros(path.shape[1])
     for i, step in enumerate(steps):
-        length = np.linalg.norm(step)
-        if length > 1e-12:
-            direction = step / length
+        size = length(step)
+        if size > 1e-12:
+            direction = step / size
         tangents[i] = direction
     tangents[-1] = direction
     # Samples before the first move take the first direction.
-    first = next((i for i, step in enumerate(steps) if np.linalg.norm(step) > 1e-12), 0)
+    first = next((i for i, step in enumerate(steps) if length(step) > 1e-12), 0)
     tangents[:first] = tangents[first]
     return tangents

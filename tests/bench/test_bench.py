@@ -141,6 +141,7 @@ def test_every_numeric_option_is_range_checked():
         _options.nonnegative_int,
         _options.positive_float,
         _options.nonnegative_float,
+        _options.one_sided_level,
     }
     typed = [
         (parser.prog, action.option_strings, action.type)
@@ -175,6 +176,11 @@ def test_every_numeric_option_is_range_checked():
             ["teleop", "--task", "known_goal", "--method", "CASA", "--participant", "p",
              "--out", "x", "--demonstrations", "-2"],
             "argument --demonstrations: must be an integer >= 0, got '-2'",
+        ),
+        (
+            ["stats", "--trials", "t.csv", "--out-csv", "s.csv", "--out-md", "s.md",
+             "--noninferiority-alpha", "0.5"],
+            "argument --noninferiority-alpha: must be a number in (0, 0.5), got '0.5'",
         ),
         (
             ["figure", "case_study", "--steps", "s.csv", "--out", "x", "--epsilon", "inf"],

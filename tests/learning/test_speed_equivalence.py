@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import torch
 
-from casa_core.assist.intents import length
+from casa_core.fixed_order import length
 from casa_core.learning import NeuralIntent, cost_network, feature_names
 from casa_core.learning.adam import Adam
 from casa_core.learning.features import bounded_cost, cost_logits

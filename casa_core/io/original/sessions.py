@@ -46,6 +46,7 @@ import numpy as np
 import pandas as pd
 
 from casa_core.defaults import PBA_DISTANCE, ROT_SPEED, SPEED
+from casa_core.fixed_order import matmul
 from casa_core.io import JOINTS, Problem
 from casa_core.io.contract import TICK
 from casa_core.io.original._checker import Checker, SessionError, load_arrays
@@ -206,7 +207,7 @@ def command_keys(q: np.ndarray, command: np.ndarray) -> str:
     """
     if not np.any(command):
         return ""
-    velocity = kin.jacobian(q)[:3] @ command
+    velocity = matmul(kin.jacobian(q)[:3], command)
     held = set()
     for axis, v in zip("xyz", velocity, strict=True):
         if abs(v) > KEY_FRACTION * SPEED:
