@@ -64,9 +64,9 @@ def unpinned() -> list[str]:
     """
     problems = []
     if "numpy" in sys.modules:
-        from numpy._core._multiarray_umath import __cpu_features__  # type: ignore[import-not-found]
-
-        wide = [f for f in SWITCHES["NPY_DISABLE_CPU_FEATURES"].split() if __cpu_features__.get(f)]
+        # Read from the loaded module: this one imports nothing but os and sys.
+        features = sys.modules["numpy"]._core._multiarray_umath.__cpu_features__
+        wide = [f for f in SWITCHES["NPY_DISABLE_CPU_FEATURES"].split() if features.get(f)]
         if wide:
             problems.append(f"numpy dispatches to {', '.join(wide)} (imported before casa_core?)")
     if "torch" in sys.modules:

@@ -3,9 +3,11 @@ BLAS-free linear algebra (casa_core.fixed_order)."""
 
 from __future__ import annotations
 
+import math
 import os
 import subprocess
 import sys
+from decimal import Decimal, localcontext
 
 import numpy as np
 import pytest
@@ -47,6 +49,17 @@ def test_fixed_order_matches_numpy_to_rounding():
     assert fixed_order.solve_spd(spd, rhs) == pytest.approx(np.linalg.solve(spd, rhs), rel=1e-10)
     with pytest.raises(np.linalg.LinAlgError, match="not positive definite"):
         fixed_order.solve_spd(-np.eye(3), np.ones(3))
+
+
+def test_length_is_within_an_ulp_of_the_exact_length():
+    # The reference: the exact square root of the exact sum of squares (50 digits).
+    rng = np.random.default_rng(1)
+    vectors = rng.normal(size=(2000, 3)) * rng.choice([1e-3, 0.1, 1.0, 10.0], size=(2000, 1))
+    with localcontext() as context:
+        context.prec = 50
+        for v in vectors:
+            exact = float(sum(Decimal(float(x)) ** 2 for x in v).sqrt())
+            assert abs(fixed_order.length(v) - exact) <= math.ulp(exact)
 
 
 _PROBE = """

@@ -7,8 +7,9 @@ Nothing here knows about robots or files; condition names come from
   analyses (ANOVA, ANCOVA, Tukey HSD, non-inferiority: pooled, Welch, paired);
 - :mod:`~casa_core.stats.posthoc`: the method x task interaction and its comparisons;
 - :mod:`~casa_core.stats.within`, :mod:`~casa_core.stats.mixed`,
-  :mod:`~casa_core.stats.ranks`: the within-subjects analyses (repeated-measures ANOVA,
-  the mixed model, Friedman, Wilcoxon with Holm);
+  :mod:`~casa_core.stats.kenward_roger`, :mod:`~casa_core.stats.ranks`: the
+  within-subjects analyses (repeated-measures ANOVA, the mixed model and its
+  Kenward-Roger F, Friedman, Wilcoxon with Holm);
 - :mod:`~casa_core.stats.margins`: non-inferiority margins from the config;
 - :mod:`~casa_core.stats.descriptives`: the data's source, participants, means and SDs;
 - :mod:`~casa_core.stats.study`: hypotheses H1-H4 as one table (``stats.csv``);

@@ -168,6 +168,9 @@ def _where(task: str) -> str:
     return TASK_LABELS.get(task, task)
 
 
+#: The two forms of every check of H1-H3: the paper's (each participant-condition an
+#: independent observation) and the within-subjects one.
+FORMS = ("paper", "within")
 #: The interaction term of the pooled tasks' test, per form.
 INTERACTION = {"paper": ("ancova", "method x task"), "within": ("rm_anova", "method * task")}
 
@@ -209,7 +212,7 @@ def superiority(
     """
     keys = {"hypothesis": hypothesis, "metric": metric, "better": better, "worse": worse}
     checks = []
-    for form in ("paper", "within"):
+    for form in FORMS:
         p = _interaction(stats, hypothesis, metric, form) if task == POOLED else None
         if p is None or task_means is None:
             parts = _superiority_parts(stats, means, form, task=task, **keys)
@@ -276,6 +279,12 @@ def noninferiority(stats, *, hypothesis, task, metric, new, reference) -> list[C
         ratio = ratios[ratios["note"].str.contains("paired")]
         if paired and not ratio.empty:
             row, name = ratio, f"{name}, ratio"
+        if not row.empty and "unbounded" in str(row["note"].iloc[0]):
+            # Fieller's bound of a reference mean not above 0: no ratio margin is shown.
+            why = "bound not below the margin"
+            text = f"{name}: Fieller's bound unbounded: {_outcome(False, why)}"
+            checks.append(Check(False, text, **keys, reason=why))
+            continue
         if row.empty or not np.isfinite(row["ci_high"].iloc[0]):
             text = f"{name}: bound not computed: {_outcome(None, 'bound not computed')}"
             checks.append(Check(None, text, **keys, reason="bound not computed"))

@@ -203,7 +203,8 @@ def result(row: pd.Series) -> str:
             f"{p_value(row.p)}"
         )
     if kind == "noninferiority_ratio":
-        text = f"ratio = {row.estimate:.3g}, one-sided Fieller bound = {row.ci_high:.3g}"
+        bound = f"{row.ci_high:.3g}" if np.isfinite(row.ci_high) else "unbounded"
+        text = f"ratio = {row.estimate:.3g}, one-sided Fieller bound = {bound}"
         verdict = "non-inferior" if row["noninferior"] else "not shown non-inferior"
         return text + f"; margin {row.margin:.3g}: {verdict}, {p_value(row.p)}"
     if kind == "noninferiority":

@@ -282,16 +282,16 @@ def _hypothesis(claim: str, checks: list[tests.Check]) -> dict:
     why = _not_passed(checks)
     measured += f"; {why}" if why else ""
     row = _row(claim, criterion, measured, share, verdict, details)
-    forms = {form: [check for check in checks if check.form == form] for form in FORMS}
+    forms = {form: [check for check in checks if check.form == form] for form in FORM_NAMES}
     if all(forms.values()):
         row["by_form"] = "; ".join(
-            f"{FORMS[form]}: {_verdict(mine)[1]}" for form, mine in forms.items()
+            f"{FORM_NAMES[form]}: {_verdict(mine)[1]}" for form, mine in forms.items()
         )
     return row
 
 
-#: The two forms of every check of H1-H3 (:class:`casa_core.stats._claim_tests.Check`).
-FORMS = {"paper": "paper form", "within": "within subjects"}
+#: The names of the two forms of the checks of H1-H3 (:data:`_claim_tests.FORMS`).
+FORM_NAMES = dict(zip(tests.FORMS, ("paper form", "within subjects"), strict=True))
 
 
 def _verdict(checks: list[tests.Check]) -> tuple[float, str]:

@@ -36,7 +36,7 @@ PAPER_N = 11
 #: H1-H3 and the checks that decide them (casa_core.stats.claims).
 HYPOTHESES = {"H1": checks.h1_checks, "H2": checks.h2_checks, "H3": checks.h3_checks}
 #: The paper's form (each participant-condition independent) and the within-subjects form.
-ANALYSES = ("paper", "within")
+ANALYSES = checks.FORMS
 #: The metrics of the hypotheses' words: "more accurate, efficient, and effortless".
 METRICS = checks.METRICS
 #: ``noninferiority_alpha``: the one-sided level of the non-inferiority checks.

@@ -215,15 +215,11 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
             # The margin is a fraction of an estimated mean: the ratio form counts its error.
             for paired in (False, True):
                 table = noninferiority.ratio_non_inferiority(
-                    data,
-                    metric,
-                    "method",
-                    new,
-                    reference,
-                    fraction=fraction,
-                    alpha=alpha,
+                    data, metric, "method", new, reference, fraction=fraction, alpha=alpha,
                     subject="participant" if paired else None,
-                )
+                )  # fmt: skip
+                # stats.csv holds finite numbers: an unbounded bound is NaN, the note says so.
+                table["bound"] = table["bound"].where(np.isfinite(table["bound"]))
                 ratio = f"ratio margin 1 + {fraction:g}, Fieller bound; {level}"
                 out.noninferiority(
                     key | {"analysis": "noninferiority_ratio"}, table, paired, not paired, ratio

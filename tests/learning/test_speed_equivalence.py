@@ -18,7 +18,6 @@ import numpy as np
 import pytest
 import torch
 
-from casa_core.fixed_order import length
 from casa_core.learning import NeuralIntent, cost_network, feature_names
 from casa_core.learning.adam import Adam
 from casa_core.learning.features import bounded_cost, cost_logits
@@ -226,12 +225,6 @@ def test_compiled_adam_step_equals_the_array_formulas_bit_for_bit(limit):
     )
     for ours, theirs in zip(got + [moved], want, strict=True):
         np.testing.assert_array_equal(ours, theirs)
-
-
-def test_length_is_numpy_norm_bit_for_bit():
-    rng = np.random.default_rng(1)
-    vectors = rng.normal(size=(2000, 3)) * rng.choice([1e-3, 0.1, 1.0, 10.0], size=(2000, 1))
-    assert all(length(v) == float(np.linalg.norm(v)) for v in vectors)
 
 
 def test_plans_with_the_numpy_cost_match_plans_with_the_torch_cost():

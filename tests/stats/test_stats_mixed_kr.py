@@ -145,3 +145,18 @@ def test_the_level_comes_from_the_config_and_reaches_power():
         pd.DataFrame(rows), sizes=[4], variant="default", replicate=1, margins=margins
     )
     assert set(detections["noninferiority_alpha"]) == {0.025}
+
+
+def test_an_unbounded_ratio_bound_is_nan_in_stats_csv_and_its_note_says_why():
+    # Two participants: on Unknown Goal the Welch ratio test's reference mean is not
+    # significantly above 0, so Fieller's bound is unbounded; stats.csv holds finite
+    # numbers or NaN only (its readers refuse infinities).
+    from tests.stats.test_stats_study import make_trials
+
+    table = analyze_study(make_trials(n_participants=2, seed=0), None,
+                          margins=Margins(fractions={"error": 0.05}))  # fmt: skip
+    ratio = table[table["analysis"] == "noninferiority_ratio"]
+    unbounded = ratio[ratio["note"].str.contains("unbounded")]
+    assert len(unbounded) >= 1 and unbounded["ci_high"].isna().all()
+    assert (~unbounded["noninferior"].astype(bool)).all()
+    assert not np.isinf(table.select_dtypes("number").to_numpy(dtype=float)).any()
