@@ -32,6 +32,9 @@ STATS_COLUMNS = [
     "sphericity_p",
     "note",
 ]
+#: Significant digits of every number of stats.csv: beyond about 14 the last bits of the
+#: LAPACK behind statsmodels and pingouin depend on the processor's kernel.
+DIGITS = 8
 #: On every non-inferiority row: the one-sided level of its test and bound
 #: (:func:`noninferiority_level` reads it back from stats.csv).
 LEVEL_NOTE = "one-sided level {:g}"
@@ -187,3 +190,18 @@ def noninferiority_level(notes) -> float | None:
     pattern = re.compile(re.escape(LEVEL_NOTE).replace(r"\{:g\}", r"([0-9.eE+-]+)"))
     found = {float(m.group(1)) for note in notes if (m := pattern.search(str(note)))}
     return found.pop() if len(found) == 1 else None
+
+
+def significant(table: pd.DataFrame, digits: int = DIGITS) -> pd.DataFrame:
+    """``table`` with every float rounded to ``digits`` significant digits (NaN stays).
+
+    Examples
+    --------
+    >>> significant(pd.DataFrame({"p": [0.012345678949, 4.413731782073364, np.nan]}))["p"].tolist()
+    [0.012345679, 4.4137318, nan]
+    """
+    out = table.copy()
+    for column in out.columns:
+        if out[column].dtype == np.float64:
+            out[column] = [float(f"{v:.{digits}g}") for v in out[column].tolist()]
+    return out

@@ -19,6 +19,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from casa_core.stats import _dense
+
 KR_COLUMNS = ["F", "df1", "df2", "p", "scaling"]
 
 
@@ -43,8 +45,8 @@ def kenward_roger(
     variances : sequence of float
         The REML estimates ``theta_i``, one per structure (a component at 0 stays in).
     L : numpy.ndarray
-        The hypothesis, ``q x p`` of rank ``q`` (e.g. the rows selecting a term's
-        coefficients).
+        The hypothesis, ``q x p`` of full row rank ``q`` (e.g. the rows selecting a
+        term's coefficients).
 
     Returns
     -------
@@ -72,32 +74,38 @@ def kenward_roger(
     X, y, L = (np.asarray(m, dtype=float) for m in (X, y, L))
     L = np.atleast_2d(L)
     G = [np.asarray(g, dtype=float) for g in structures]
-    V = sum(theta * g for theta, g in zip(variances, G, strict=True))
-    Vinv = np.linalg.inv(V)
-    Phi = np.linalg.inv(X.T @ Vinv @ X)
-    beta = Phi @ X.T @ Vinv @ y
+    # Every product and solve in fixed order (stats._dense): the same bits on every CPU.
+    mm = _dense.matmul
+    V = np.sum([theta * g for theta, g in zip(variances, G, strict=True)], axis=0)
+    Vinv = _dense.spd_inverse(V)
+    VinvX = mm(Vinv, X)
+    Phi = _dense.spd_inverse(mm(X.T, VinvX))
+    beta = mm(Phi, mm(VinvX.T, y))
     # P = V^-1 - V^-1 X Phi X' V^-1: the REML projection.
-    VinvX = Vinv @ X
-    P = Vinv - VinvX @ Phi @ VinvX.T
+    P = Vinv - mm(mm(VinvX, Phi), VinvX.T)
     k = len(G)
     # d(X'V^-1 X)/d theta_i = -X'V^-1 G_i V^-1 X; Q_ij = X'V^-1 G_i V^-1 G_j V^-1 X.
-    GVX = [g @ VinvX for g in G]
-    Pd = [-(VinvX.T @ gvx) for gvx in GVX]
-    PG = [P @ g for g in G]
+    GVX = [mm(g, VinvX) for g in G]
+    Pd = [-mm(VinvX.T, gvx) for gvx in GVX]
+    PG = [mm(P, g) for g in G]
     information = np.array([[np.sum(PG[i] * PG[j].T) for j in range(k)] for i in range(k)])
     # W: the asymptotic covariance of the REML estimates, 2 x the inverse of tr(P G_i P G_j).
-    W = 2.0 * np.linalg.pinv(information)
+    try:
+        W = 2.0 * _dense.spd_inverse(information)
+    except np.linalg.LinAlgError:  # a variance without information: pbkrtest's generalised inverse
+        W = 2.0 * np.linalg.pinv(information)
     U = np.zeros_like(Phi)
+    VinvGVX = [mm(Vinv, gvx) for gvx in GVX]
     for i in range(k):
         for j in range(k):
-            Q = GVX[i].T @ Vinv @ GVX[j]
-            U += W[i, j] * (Q - Pd[i] @ Phi @ Pd[j])
-    PhiA = Phi + 2.0 * Phi @ U @ Phi
-    q = int(np.linalg.matrix_rank(L))
-    Theta = L.T @ np.linalg.solve(L @ Phi @ L.T, L)
-    parts = [Theta @ Phi @ Pd[i] @ Phi for i in range(k)]
+            Q = mm(GVX[i].T, VinvGVX[j])
+            U += W[i, j] * (Q - mm(mm(Pd[i], Phi), Pd[j]))
+    PhiA = Phi + 2.0 * mm(mm(Phi, U), Phi)
+    q = L.shape[0]
+    Theta = mm(L.T, _dense.cholesky_solve(_dense.cholesky(mm(mm(L, Phi), L.T)), L))
+    parts = [mm(mm(mm(Theta, Phi), Pd[i]), Phi) for i in range(k)]
     traces = np.array([np.trace(m) for m in parts])
-    A1 = float(traces @ W @ traces)
+    A1 = float(np.sum(traces * mm(W, traces)))
     A2 = float(sum(W[i, j] * np.sum(parts[i] * parts[j].T) for i in range(k) for j in range(k)))
     # Degenerate designs (no information on a variance) divide by 0: NaN, not an error.
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -114,8 +122,8 @@ def kenward_roger(
         df2 = float(4.0 + (q + 2.0) / (q * rho - 1.0))
         # lambda = m / (E* (m - 2)), E* = 1 / (1 - A2 / q); pbkrtest's guard where m is 2.
         scaling = 1.0 if abs(df2 - 2.0) < 1e-2 else float(df2 * (1.0 - A2 / q) / (df2 - 2.0))
-    Lb = L @ beta
-    wald = float(Lb @ np.linalg.solve(L @ PhiA @ L.T, Lb))
+    Lb = mm(L, beta)
+    wald = float(np.sum(Lb * _dense.cholesky_solve(_dense.cholesky(mm(mm(L, PhiA), L.T)), Lb)))
     F = scaling * wald / q
     if not (np.isfinite(F) and np.isfinite(df2) and df2 > 0):
         F = df2 = np.nan

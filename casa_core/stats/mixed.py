@@ -42,6 +42,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
+from casa_core.stats import _dense
 from casa_core.stats._tables import (
     Skipped,
     as_list,
@@ -50,7 +51,7 @@ from casa_core.stats._tables import (
     require_representable,
     skipped_row,
 )
-from casa_core.stats.kenward_roger import kenward_roger
+from casa_core.stats.kenward_roger import KR_COLUMNS, kenward_roger
 
 MIXED_COLUMNS = ["term", "F", "df1", "df2", "p", "chi2", "lrt_df", "p_lrt", "n", "n_groups"]
 #: A variance component over the residual variance below which the fit is at the
@@ -77,33 +78,48 @@ class _Fit:
             raise Skipped("no error variance: the fixed effects fit every value exactly")
         df = n - p if reml else n
 
+        Xt = np.ascontiguousarray(X.T)
+
         def profiled(gamma):
             H = np.eye(n) + sum((g * G for g, G in zip(gamma, structures, strict=True)), 0.0)
-            Hi = np.linalg.inv(H)
-            XtHiX = X.T @ Hi @ X
-            residual = z - X @ np.linalg.solve(XtHiX, X.T @ Hi @ z)
-            quadratic = float(residual @ Hi @ residual)
+            low = _dense.cholesky(H)
+            HiX, Hiz = _dense.cholesky_solve(low, X), _dense.cholesky_solve(low, z)
+            XtHiX = _dense.matmul(Xt, HiX)
+            inner = _dense.cholesky(XtHiX)
+            beta = _dense.cholesky_solve(inner, _dense.matmul(Xt, Hiz))
+            # r' H^-1 r with r = z - X beta: H^-1 r = H^-1 z - H^-1 X beta.
+            residual = z - _dense.matmul(X, beta)
+            quadratic = float(np.sum(residual * (Hiz - _dense.matmul(HiX, beta))))
             if not quadratic > 0.0:
                 return np.inf, quadratic
-            value = df * np.log(quadratic) + np.linalg.slogdet(H)[1]
+            value = df * np.log(quadratic) + _dense.logdet(low)
             if reml:
-                value += np.linalg.slogdet(XtHiX)[1]
+                value += _dense.logdet(inner)
             return value, quadratic
 
-        bounds: list[tuple[float | None, float | None]] = [(0.0, None)] * len(structures)
-        starts = [np.ones(len(structures)), np.full(len(structures), 0.1)]
+        # Over theta = sqrt(gamma), as lme4 does: no bounds, and a component at 0 is an
+        # interior point. Nelder-Mead, whose steps are elementwise (no BLAS), from two
+        # starts; the criterion is in fixed order too, so the optimum has the same bits
+        # on every machine.
+        def criterion(theta: np.ndarray) -> float:
+            try:
+                return float(profiled(theta * theta)[0])
+            except np.linalg.LinAlgError:  # ratios so far apart that rounding breaks H
+                return np.inf
 
-        def criterion(gamma: np.ndarray) -> float:
-            return float(profiled(gamma)[0])
-
+        options = {"xatol": 1e-10, "fatol": 1e-13, "maxiter": 20000, "maxfev": 20000}
+        starts = [np.ones(len(structures)), np.full(len(structures), np.sqrt(0.1))]
         fits = [
-            optimize.minimize(criterion, start, method="L-BFGS-B", bounds=bounds)
+            optimize.minimize(criterion, start, method="Nelder-Mead", options=options)  # type: ignore[call-overload]
             for start in starts
         ]
         best = min(fits, key=lambda fit: fit.fun)
         self.converged = bool(best.success)
-        self.gamma = np.maximum(best.x, 0.0)
-        value, quadratic = profiled(self.gamma)
+        self.gamma = best.x * best.x
+        try:
+            value, quadratic = profiled(self.gamma)
+        except np.linalg.LinAlgError as error:
+            raise Skipped(f"the mixed model could not be fitted: {error}") from error
         sigma2 = quadratic / df
         self.scale = sigma2 * spread**2
         # -2 log-likelihood of the scaled data plus the Jacobian of the scaling.
@@ -231,9 +247,12 @@ def mixedlm(
         for name, columns in X.design_info.term_name_slices.items():
             if name != "Intercept":
                 L = np.eye(X.shape[1])[columns]
-                tests[name] = kenward_roger(
-                    np.asarray(X), y, [*structures, np.eye(len(y))], variances, L
-                )
+                try:
+                    tests[name] = kenward_roger(
+                        np.asarray(X), y, [*structures, np.eye(len(y))], variances, L
+                    )
+                except np.linalg.LinAlgError:  # a covariance that rounding leaves singular
+                    tests[name] = pd.Series(dict.fromkeys(KR_COLUMNS, np.nan))
     except Skipped as why:
         return pd.concat(
             [skipped_row(MIXED_COLUMNS, str(why), term=t) for t in terms], ignore_index=True

@@ -22,7 +22,7 @@ import pandas as pd
 from casa_core.io.contract import CONDITION_KEYS, SURVEY_COLUMNS
 from casa_core.io.tables import numeric_column, require_columns
 from casa_core.stats import between, noninferiority, posthoc, within
-from casa_core.stats._rows import LEVEL_NOTE, STATS_COLUMNS, Rows
+from casa_core.stats._rows import LEVEL_NOTE, STATS_COLUMNS, Rows, significant
 from casa_core.stats.margins import Margins
 from casa_core.vocabulary import (
     ANSWERED_BY,
@@ -375,7 +375,7 @@ def analyze_study(
         if answered_by_model(likert):
             for row in out.rows[first:]:
                 row["note"] = "; ".join(x for x in (row["note"], MODEL_OUTPUT_NOTE) if x)
-    table = pd.DataFrame(out.rows, columns=STATS_COLUMNS)
+    table = significant(pd.DataFrame(out.rows, columns=STATS_COLUMNS))
     table["noninferior"] = table["noninferior"].astype("boolean")
     table["n"] = table["n"].astype("Int64")
     return table

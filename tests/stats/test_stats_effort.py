@@ -64,5 +64,6 @@ def test_log_effort_rows_are_within_subjects_only(trials, table):
         trials.assign(y=np.log1p(trials["effort"])), "y", "method", "participant"
     ).iloc[0]
     row = _h1(table, metric=LOG_EFFORT, analysis="rm_anova").iloc[0]
-    assert row["statistic"] == pytest.approx(direct["F"], rel=1e-12)
-    assert row["p_uncorrected"] == pytest.approx(direct["p"], rel=1e-12)
+    # stats.csv holds 8 significant digits (stats._rows.DIGITS): half a unit in the 8th.
+    assert row["statistic"] == pytest.approx(direct["F"], rel=1e-8)
+    assert row["p_uncorrected"] == pytest.approx(direct["p"], rel=1e-8)
