@@ -25,9 +25,11 @@ likelihood (REML likelihoods of models with different fixed effects are not comp
 main effects in the additive model, the interaction against it. With 11 participants the
 likelihood ratio's chi-square rejects too often; it is kept for comparison.
 
-The fits maximise the likelihood profiled over the residual variance, over the variance
-ratios within their bounds (dense matrices: a study has tens of cells), as lme4 does: a
-component whose estimate is 0 is found at 0, where statsmodels' optimiser stops short of
+The fits maximise the likelihood profiled over the residual variance, over the square
+roots of the variance ratios (lme4's theta; dense matrices: a study has tens of cells),
+by Nelder-Mead in fixed-order arithmetic (:mod:`casa_core.stats._dense`), so the optimum
+has the same bits on every machine. A component whose estimate is 0 is found at 0, where
+statsmodels' optimiser stops short of
 the boundary and reports non-convergence (on the simulated study's H3 error, its
 estimates give a Kenward-Roger F of 6.10 against lme4's 6.15). A component at the
 boundary (below :data:`BOUNDARY_RATIO` of the residual variance) is named in the note:
@@ -63,8 +65,8 @@ class _Fit:
     """ML or REML fit of ``V = sigma^2 (I + sum_i gamma_i G_i)``, ``gamma_i >= 0``.
 
     The likelihood is profiled over ``sigma^2`` and the fixed effects and maximised over
-    the variance ratios ``gamma`` within their bounds, so a component whose estimate is 0
-    is found at 0 (lme4 does the same; statsmodels' optimiser stops short of it).
+    ``theta = sqrt(gamma)``, unbounded, so a component whose estimate is 0 is found at 0
+    (lme4 does the same; statsmodels' optimiser stops short of it).
     """
 
     def __init__(self, X: np.ndarray, y: np.ndarray, structures: list[np.ndarray], reml: bool):
