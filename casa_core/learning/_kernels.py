@@ -1,12 +1,12 @@
 """Compiled loops of the learned cost and its gradient (numba, cached on disk).
 
-:class:`~casa_core.learning.numpy_cost.NumpyStateCost` runs the network's matrix
-products in torch and everything between them here: the features of the states, the
-leaky ReLUs, the sigmoid and the chain rule back to the states. Each loop runs a fixed
+:class:`~casa_core.learning.numpy_cost.NumpyStateCost` runs the whole learned cost here:
+the features of the states, the network's matrix products (:func:`linear`), the leaky
+ReLUs, the sigmoid and the chain rule back to the states. Each loop runs a fixed
 sequence of IEEE operations (no ``fastmath``: no reordering, no fused multiply-adds), so
-the same states give the same bits on every run. They are compiled once per machine and
-cached (next to this file, or in numba's user cache directory where the package is
-read-only).
+the same states give the same bits on every run and on every processor, whatever BLAS
+kernel the processor would get. They are compiled once per machine and cached (next to
+this file, or in numba's user cache directory where the package is read-only).
 
 States are float64 ``(n, 4)`` rows ``[x, y, z, rot]``; the network's inputs and layers
 are float32 ``(n, 12 + 4K)`` and ``(n, H)`` for K objects and H hidden units, the inputs
@@ -52,6 +52,22 @@ def features(states, objects, length_scale, basis, inputs, cos_sin, distances):
             distance = math.sqrt(dx * dx + dy * dy + dz * dz + DISTANCE_EPS)
             distances[i, o] = distance
             inputs[i, 12 + 3 * k + o] = np.float32(distance / length_scale)
+
+
+@numba.njit(cache=True)
+def linear(x, w, bias, out):
+    """``out = bias + x @ w`` (float32), each sum in the order of ``w``'s rows, bias first.
+
+    The innermost loop runs along ``out``'s row, so it vectorises without reordering
+    any sum: a wider vector unit gives the same bits.
+    """
+    for i in range(x.shape[0]):
+        for j in range(w.shape[1]):
+            out[i, j] = bias[j]
+        for k in range(w.shape[0]):
+            xik = x[i, k]
+            for j in range(w.shape[1]):
+                out[i, j] += xik * w[k, j]
 
 
 @numba.njit(cache=True)

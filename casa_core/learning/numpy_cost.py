@@ -6,12 +6,13 @@ small, torch's per-operation and autograd overhead costs several times the
 arithmetic; :class:`NumpyStateCost` computes the same formula
 (:mod:`casa_core.learning.features`: features in float64, the network in float32,
 the sigmoid in float64) and its gradient by hand (the chain rule through the
-network and the features), with no autograd: the network's four matrix products in
-torch, everything between them in compiled loops (:mod:`casa_core.learning._kernels`),
-into work arrays kept per row count. Training the network's weights stays in torch.
+network and the features), with no autograd and no BLAS: all of it in compiled loops
+of a fixed order (:mod:`casa_core.learning._kernels`), into work arrays kept per row
+count, so the planner's results do not depend on the processor's BLAS kernel. Training
+the network's weights stays in torch.
 
 The values agree with the torch formula to float32 rounding (the matrix products
-may sum in another order): ``tests/learning/test_speed_equivalence.py`` checks costs and
+sum in another order): ``tests/learning/test_speed_equivalence.py`` checks costs and
 gradients against torch's autograd.
 
 Examples
@@ -56,7 +57,7 @@ _BUFFERED_SIZES = 32
 
 
 def _linear_layers(network: torch.nn.Sequential) -> tuple[list, float]:
-    """``[(W, b), ...]`` (detached float32 copies) of the 3 linear layers and the leaky slope."""
+    """``[(W, b), ...]`` (float32 numpy copies) of the 3 linear layers and the leaky slope."""
     modules = list(network)
     linears = [m for m in modules if isinstance(m, torch.nn.Linear)]
     slopes = {m.negative_slope for m in modules if isinstance(m, torch.nn.LeakyReLU)}
@@ -65,24 +66,26 @@ def _linear_layers(network: torch.nn.Sequential) -> tuple[list, float]:
             "the numpy cost needs the network of casa_core.learning.cost_network "
             "(Linear, LeakyReLU, Linear, LeakyReLU, Linear)"
         )
-    layers = [(m.weight.detach().float().clone(), m.bias.detach().float().clone()) for m in linears]
+    layers = [
+        (m.weight.detach().float().numpy().copy(), m.bias.detach().float().numpy().copy())
+        for m in linears
+    ]
     return layers, float(slopes.pop())
 
 
 class _Buffers:
-    """Work arrays for ``n`` rows: each a numpy array and, where torch writes it, a tensor."""
+    """Work arrays for ``n`` rows."""
 
     def __init__(self, n: int, n_inputs: int, hidden: int, k: int):
-        def pair(*shape):
-            tensor = torch.empty(shape, dtype=torch.float32)
-            return tensor, tensor.numpy()
+        def new(*shape):
+            return np.empty(shape, dtype=np.float32)
 
-        (self.inputs_t, self.inputs) = pair(n, n_inputs)
-        (self.h1_t, self.h1), (self.a1_t, self.a1) = pair(n, hidden), pair(n, hidden)
-        (self.h2_t, self.h2), (self.a2_t, self.a2) = pair(n, hidden), pair(n, hidden)
-        (self.logits_t, self.logits), (self.slopes_t, self.slopes) = pair(n), pair(n)
-        (self.d_h2_t, self.d_h2), (self.d_h1_t, self.d_h1) = pair(n, hidden), pair(n, hidden)
-        (self.d_inputs_t, self.d_inputs) = pair(n, n_inputs)
+        self.inputs, self.d_inputs = new(n, n_inputs), new(n, n_inputs)
+        self.h1, self.a1, self.h2, self.a2 = (new(n, hidden) for _ in range(4))
+        self.d_h2, self.d_h1 = new(n, hidden), new(n, hidden)
+        # The last layer writes a column; the sigmoid reads it as a vector.
+        self.logits_column = new(n, 1)
+        self.logits, self.slopes = self.logits_column.reshape(n), new(n)
         self.cos_sin, self.distances = np.empty((n, 2)), np.empty((n, k))
         self.no_slopes = self.slopes[:0]
 
@@ -107,11 +110,12 @@ class NumpyStateCost:
 
     def __init__(self, network, *, objects, length_scale: float, cost_scale: float, offset=0.0):
         layers, slope = _linear_layers(network)
-        (self._w1, self._b1), (self._w2, self._b2), (w3, b3) = layers
-        self._w3, self._b3 = w3[0].contiguous(), b3
-        self._w3_np = self._w3.numpy()
+        (self._w1, self._b1), (self._w2, self._b2), (w3, self._b3) = layers
         # Transposed once, contiguous: the forward pass multiplies by W^T.
-        self._w1t, self._w2t = self._w1.T.contiguous(), self._w2.T.contiguous()
+        self._w1t, self._w2t = np.ascontiguousarray(self._w1.T), np.ascontiguousarray(self._w2.T)
+        self._w3t, self._w3 = np.ascontiguousarray(w3.T), w3[0]
+        self._no_bias_inputs = np.zeros(self._w1.shape[1], dtype=np.float32)
+        self._no_bias_hidden = np.zeros(self._w1.shape[0], dtype=np.float32)
         # float32, as torch's leaky ReLU multiplies by it.
         self._slope = np.float32(slope)
         self.objects = np.ascontiguousarray(np.asarray(objects, dtype=float).reshape(-1, 3))
@@ -121,8 +125,7 @@ class NumpyStateCost:
         self._buffers: dict[int, _Buffers] = {}
 
     def __getstate__(self):
-        # A copy (deepcopy, pickle) gets its own work arrays: copied, a tensor and the
-        # numpy view of its memory would no longer share it.
+        # A copy (deepcopy) gets its own, empty work arrays: they are scratch, not state.
         return {**self.__dict__, "_buffers": {}}
 
     def _forward(self, states: np.ndarray, *, with_slopes: bool):
@@ -146,12 +149,11 @@ class NumpyStateCost:
             work.cos_sin,
             work.distances,
         )
-        # No autograd context needed: neither the weights nor the inputs require grad.
-        torch.addmm(self._b1, work.inputs_t, self._w1t, out=work.h1_t)
+        _kernels.linear(work.inputs, self._w1t, self._b1, work.h1)
         _kernels.leaky_relu(work.h1, self._slope, work.a1)
-        torch.addmm(self._b2, work.a1_t, self._w2t, out=work.h2_t)
+        _kernels.linear(work.a1, self._w2t, self._b2, work.h2)
         _kernels.leaky_relu(work.h2, self._slope, work.a2)
-        torch.addmv(self._b3, work.a2_t, self._w3, out=work.logits_t)
+        _kernels.linear(work.a2, self._w3t, self._b3, work.logits_column)
         values = np.empty(n)
         slopes = work.slopes if with_slopes else work.no_slopes
         _kernels.costs(work.logits, self.cost_scale, self.offset, values, slopes)
@@ -165,10 +167,10 @@ class NumpyStateCost:
         """Per-state costs ``(...)`` and the gradient of their sum in the states ``(..., 4)``."""
         values, shape, flat, work = self._forward(states, with_slopes=True)
         # The network's backward pass, as autograd computes it.
-        _kernels.output_backward(work.slopes, self._w3_np, work.h2, self._slope, work.d_h2)
-        torch.mm(work.d_h2_t, self._w2, out=work.d_h1_t)
+        _kernels.output_backward(work.slopes, self._w3, work.h2, self._slope, work.d_h2)
+        _kernels.linear(work.d_h2, self._w2, self._no_bias_hidden, work.d_h1)
         _kernels.leaky_relu_backward(work.d_h1, work.h1, self._slope)
-        torch.mm(work.d_h1_t, self._w1, out=work.d_inputs_t)
+        _kernels.linear(work.d_h1, self._w1, self._no_bias_inputs, work.d_inputs)
         grad = np.empty((len(flat), 4))
         _kernels.features_backward(
             work.d_inputs,
