@@ -56,18 +56,48 @@ def features(states, objects, length_scale, basis, inputs, cos_sin, distances):
 
 @numba.njit(cache=True)
 def linear(x, w, bias, out):
-    """``out = bias + x @ w`` (float32), each sum in the order of ``w``'s rows, bias first.
+    """``out = bias + x @ w`` (float32): each sum starts at the bias and adds
+    ``x[i, k] * w[k, j]`` in the order of k, each product and sum rounded on its own.
 
-    The innermost loop runs along ``out``'s row, so it vectorises without reordering
-    any sum: a wider vector unit gives the same bits.
+    Two rows of ``x`` and four of ``w`` at a time, the innermost loop along ``out``'s
+    row: it vectorises and uses each loaded weight twice, and no sum changes its order,
+    so any vector width gives the bits of a plain loop (tests/learning: bit for bit).
     """
-    for i in range(x.shape[0]):
+    n_rows, n_k = x.shape
+    pairs = n_rows - n_rows % 2
+    for i in range(0, pairs, 2):
+        _two_rows(x, w, bias, out, i)
+    if pairs < n_rows:
+        _one_row(x, w, bias, out, n_rows - 1)
+
+
+@numba.njit(cache=True, inline="always")
+def _two_rows(x, w, bias, out, i):
+    n_k, n_j = w.shape
+    blocks = n_k - n_k % 4
+    for j in range(n_j):
+        out[i, j] = bias[j]
+        out[i + 1, j] = bias[j]
+    for k in range(0, blocks, 4):
+        a0, a1, a2, a3 = x[i, k], x[i, k + 1], x[i, k + 2], x[i, k + 3]
+        b0, b1, b2, b3 = x[i + 1, k], x[i + 1, k + 1], x[i + 1, k + 2], x[i + 1, k + 3]
+        for j in range(n_j):
+            w0, w1, w2, w3 = w[k, j], w[k + 1, j], w[k + 2, j], w[k + 3, j]
+            out[i, j] = (((out[i, j] + a0 * w0) + a1 * w1) + a2 * w2) + a3 * w3
+            out[i + 1, j] = (((out[i + 1, j] + b0 * w0) + b1 * w1) + b2 * w2) + b3 * w3
+    for k in range(blocks, n_k):
+        for j in range(n_j):
+            out[i, j] += x[i, k] * w[k, j]
+            out[i + 1, j] += x[i + 1, k] * w[k, j]
+
+
+@numba.njit(cache=True, inline="always")
+def _one_row(x, w, bias, out, i):
+    for j in range(w.shape[1]):
+        out[i, j] = bias[j]
+    for k in range(w.shape[0]):
         for j in range(w.shape[1]):
-            out[i, j] = bias[j]
-        for k in range(w.shape[0]):
-            xik = x[i, k]
-            for j in range(w.shape[1]):
-                out[i, j] += xik * w[k, j]
+            out[i, j] += x[i, k] * w[k, j]
 
 
 @numba.njit(cache=True)

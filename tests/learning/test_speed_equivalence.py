@@ -19,6 +19,7 @@ import pytest
 import torch
 
 from casa_core.learning import NeuralIntent, cost_network, feature_names
+from casa_core.learning import _kernels as learning_kernels
 from casa_core.learning.adam import Adam
 from casa_core.learning.features import bounded_cost, cost_logits
 from casa_core.learning.numpy_cost import NumpyStateCost
@@ -178,6 +179,29 @@ def python_walk(starts, targets, limit):
             walked.append(previous)
         out.append(walked)
     return np.array(out)
+
+
+def python_linear(x, w, bias):
+    """``bias + x @ w`` on float32 scalars: each sum from the bias, k in order."""
+    out = np.empty((x.shape[0], w.shape[1]), dtype=np.float32)
+    for i in range(x.shape[0]):
+        for j in range(w.shape[1]):
+            total = bias[j]
+            for k in range(w.shape[0]):
+                total = np.float32(total + np.float32(x[i, k] * w[k, j]))
+            out[i, j] = total
+    return out
+
+
+# Odd and even row counts, inner sizes with and without a remainder of the 4-row blocks.
+@pytest.mark.parametrize("rows, inner, width", [(1, 3, 1), (2, 4, 5), (7, 9, 8), (10, 28, 17)])
+def test_blocked_linear_equals_a_plain_loop_bit_for_bit(rows, inner, width):
+    rng = np.random.default_rng(rows + inner)
+    x, w = (rng.normal(size=shape).astype(np.float32) for shape in [(rows, inner), (inner, width)])
+    bias = rng.normal(size=width).astype(np.float32)
+    out = np.full((rows, width), np.nan, dtype=np.float32)
+    learning_kernels.linear(x, w, bias, out)
+    np.testing.assert_array_equal(out, python_linear(x, w, bias))
 
 
 @pytest.mark.parametrize("limit", ["axis", "norm"])
