@@ -29,8 +29,9 @@ SWITCHES = {
     "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR",
     # torch: ATen's vectorised kernels (reductions, elementwise maths).
     "ATEN_CPU_CAPABILITY": "avx2",
-    # MKL (torch's matrix products): the code path Intel documents as giving the same
-    # results on Intel and non-Intel processors (conditional numerical reproducibility).
+    # MKL (any matrix product left in torch; the learned cost's run in a fixed order):
+    # the code path Intel documents as giving the same results on Intel and non-Intel
+    # processors (conditional numerical reproducibility).
     "MKL_CBWR": "COMPATIBLE",
     # oneDNN (some of torch's CPU operators).
     "ONEDNN_MAX_CPU_ISA": "AVX2",

@@ -5,6 +5,7 @@
 each with one job:
 
 - :mod:`~casa_core.learning.features`: the cost's inputs, network and formula;
+- :mod:`~casa_core.learning.network`: the network run in torch, its products in a fixed order;
 - :mod:`~casa_core.learning.neural_intent`: the learned intent and its calibration;
 - :mod:`~casa_core.learning.config`: the settings (:class:`IRLConfig`);
 - :mod:`~casa_core.learning.demonstrations`: demonstrations resampled for IRL;

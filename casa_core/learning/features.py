@@ -39,6 +39,7 @@ from collections.abc import Mapping
 import numpy as np
 import torch
 
+from casa_core.learning.network import network_output
 from casa_core.planning.rotation import end_effector_rotation
 
 
@@ -106,8 +107,12 @@ def cost_network(n_inputs: int, *, hidden: int, negative_slope: float, seed: int
 
 
 def cost_logits(network, states: torch.Tensor, *, objects: torch.Tensor, length_scale: float):
-    """The network's output f_phi(x(s)) ``(...)`` (float64) at states ``(..., 4)``."""
-    return network(state_features(states, objects, length_scale=length_scale))[..., 0].double()
+    """The network's output f_phi(x(s)) ``(...)`` (float64) at states ``(..., 4)``.
+
+    The network runs with its products in a fixed order (:mod:`casa_core.learning.network`).
+    """
+    inputs = state_features(states, objects, length_scale=length_scale)
+    return network_output(network, inputs)[..., 0].double()
 
 
 def bounded_cost(logits: torch.Tensor, cost_scale: float, *, mean_trajectory: bool = False):

@@ -16,8 +16,10 @@ and where they depart from the original implementation, are those of
 :class:`~casa_core.learning.config.IRLConfig` (docs/departures.md).
 
 Determinism: the network is initialised from a ``torch.Generator`` seeded with
-``seed`` (no global random state), the planner is deterministic and training runs
-on one thread, so the same demonstrations, objects and seed give the same weights.
+``seed`` (no global random state), the planner is deterministic, training runs
+on one thread and the network's products sum in a fixed order
+(:mod:`casa_core.learning.network`), so the same demonstrations, objects and seed give
+the same weights on every processor.
 """
 
 from __future__ import annotations

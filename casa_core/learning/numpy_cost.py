@@ -9,7 +9,8 @@ the sigmoid in float64) and its gradient by hand (the chain rule through the
 network and the features), with no autograd and no BLAS: all of it in compiled loops
 of a fixed order (:mod:`casa_core.learning._kernels`), into work arrays kept per row
 count, so the planner's results do not depend on the processor's BLAS kernel. Training
-the network's weights stays in torch.
+the network's weights stays in torch (:mod:`casa_core.learning.network`: the same
+products, with autograd).
 
 The values agree with the torch formula to float32 rounding (the matrix products
 sum in another order): ``tests/learning/test_speed_equivalence.py`` checks costs and
