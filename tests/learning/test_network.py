@@ -14,10 +14,7 @@ import torch
 
 from casa_core.learning import cost_network
 from casa_core.learning.network import network_output
-from tests.learning.test_speed_equivalence import python_linear
-
-#: float32 rounding of sums of up to 64 terms of order one, in two different orders.
-FLOAT32_SUMS = 1e-5
+from tests.learning.test_speed_equivalence import FLOAT32_GRADIENT, python_linear
 
 
 def leaky(h, slope):
@@ -53,10 +50,10 @@ def test_values_and_gradients_equal_torch_autograd(shape):
     (want**2).sum().backward()
 
     assert got.shape == want.shape
-    np.testing.assert_allclose(got.detach(), want.detach(), rtol=FLOAT32_SUMS, atol=1e-6)
-    np.testing.assert_allclose(got_x.grad, want_x.grad, rtol=FLOAT32_SUMS, atol=1e-5)
+    np.testing.assert_allclose(got.detach(), want.detach(), rtol=FLOAT32_GRADIENT, atol=1e-6)
+    np.testing.assert_allclose(got_x.grad, want_x.grad, rtol=FLOAT32_GRADIENT, atol=1e-5)
     for got_grad, param in zip(got_grads, net.parameters(), strict=True):
-        np.testing.assert_allclose(got_grad, param.grad, rtol=FLOAT32_SUMS, atol=1e-4)
+        np.testing.assert_allclose(got_grad, param.grad, rtol=FLOAT32_GRADIENT, atol=1e-4)
 
 
 def test_a_network_of_other_layers_is_refused():
