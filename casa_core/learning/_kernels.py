@@ -2,7 +2,8 @@
 
 :class:`~casa_core.learning.numpy_cost.NumpyStateCost` runs the whole learned cost here:
 the features of the states, the network's matrix products (:func:`linear`), the leaky
-ReLUs, the sigmoid and the chain rule back to the states. Each loop runs a fixed
+ReLUs, the sigmoid and the chain rule back to the states, in one call of :func:`cost` or
+:func:`cost_and_gradient` (a planner's iteration pays one call's overhead). Each loop runs a fixed
 sequence of IEEE operations (no ``fastmath``: no reordering, no fused multiply-adds), so
 the same states give the same bits on every run and on every processor, whatever BLAS
 kernel the processor would get. They are compiled once per machine and cached (next to
@@ -59,36 +60,45 @@ def linear(x, w, bias, out):
     """``out = bias + x @ w`` (float32): each sum starts at the bias and adds
     ``x[i, k] * w[k, j]`` in the order of k, each product and sum rounded on its own.
 
-    Two rows of ``x`` and four of ``w`` at a time, the innermost loop along ``out``'s
-    row: it vectorises and uses each loaded weight twice, and no sum changes its order,
-    so any vector width gives the bits of a plain loop (tests/learning: bit for bit).
+    Four rows of ``x`` and four of ``w`` at a time, the innermost loop along ``out``'s
+    row: it vectorises and uses each loaded weight four times. Fewer than 8 columns
+    (the last layer's one) run eight rows' sums side by side instead, so that they do
+    not wait on each other. No sum changes its order, so any vector width gives the
+    bits of a plain loop (tests/learning: bit for bit).
     """
-    n_rows, n_k = x.shape
-    pairs = n_rows - n_rows % 2
-    for i in range(0, pairs, 2):
-        _two_rows(x, w, bias, out, i)
-    if pairs < n_rows:
-        _one_row(x, w, bias, out, n_rows - 1)
+    n_rows = x.shape[0]
+    if w.shape[1] < 8:
+        _narrow(x, w, bias, out)
+        return
+    quads = n_rows - n_rows % 4
+    for i in range(0, quads, 4):
+        _four_rows(x, w, bias, out, i)
+    for i in range(quads, n_rows):
+        _one_row(x, w, bias, out, i)
 
 
 @numba.njit(cache=True, inline="always")
-def _two_rows(x, w, bias, out, i):
+def _four_rows(x, w, bias, out, i):
     n_k, n_j = w.shape
     blocks = n_k - n_k % 4
-    for j in range(n_j):
-        out[i, j] = bias[j]
-        out[i + 1, j] = bias[j]
+    for r in range(4):
+        for j in range(n_j):
+            out[i + r, j] = bias[j]
     for k in range(0, blocks, 4):
         a0, a1, a2, a3 = x[i, k], x[i, k + 1], x[i, k + 2], x[i, k + 3]
         b0, b1, b2, b3 = x[i + 1, k], x[i + 1, k + 1], x[i + 1, k + 2], x[i + 1, k + 3]
+        c0, c1, c2, c3 = x[i + 2, k], x[i + 2, k + 1], x[i + 2, k + 2], x[i + 2, k + 3]
+        d0, d1, d2, d3 = x[i + 3, k], x[i + 3, k + 1], x[i + 3, k + 2], x[i + 3, k + 3]
         for j in range(n_j):
             w0, w1, w2, w3 = w[k, j], w[k + 1, j], w[k + 2, j], w[k + 3, j]
             out[i, j] = (((out[i, j] + a0 * w0) + a1 * w1) + a2 * w2) + a3 * w3
             out[i + 1, j] = (((out[i + 1, j] + b0 * w0) + b1 * w1) + b2 * w2) + b3 * w3
+            out[i + 2, j] = (((out[i + 2, j] + c0 * w0) + c1 * w1) + c2 * w2) + c3 * w3
+            out[i + 3, j] = (((out[i + 3, j] + d0 * w0) + d1 * w1) + d2 * w2) + d3 * w3
     for k in range(blocks, n_k):
-        for j in range(n_j):
-            out[i, j] += x[i, k] * w[k, j]
-            out[i + 1, j] += x[i + 1, k] * w[k, j]
+        for r in range(4):
+            for j in range(n_j):
+                out[i + r, j] += x[i + r, k] * w[k, j]
 
 
 @numba.njit(cache=True, inline="always")
@@ -98,6 +108,28 @@ def _one_row(x, w, bias, out, i):
     for k in range(w.shape[0]):
         for j in range(w.shape[1]):
             out[i, j] += x[i, k] * w[k, j]
+
+
+@numba.njit(cache=True, inline="always")
+def _narrow(x, w, bias, out):
+    n_rows, n_k = x.shape
+    eights = n_rows - n_rows % 8
+    for j in range(w.shape[1]):
+        for i in range(0, eights, 8):
+            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = bias[j]
+            for k in range(n_k):
+                wk = w[k, j]
+                s0, s1 = s0 + x[i, k] * wk, s1 + x[i + 1, k] * wk
+                s2, s3 = s2 + x[i + 2, k] * wk, s3 + x[i + 3, k] * wk
+                s4, s5 = s4 + x[i + 4, k] * wk, s5 + x[i + 5, k] * wk
+                s6, s7 = s6 + x[i + 6, k] * wk, s7 + x[i + 7, k] * wk
+            out[i, j], out[i + 1, j], out[i + 2, j], out[i + 3, j] = s0, s1, s2, s3
+            out[i + 4, j], out[i + 5, j], out[i + 6, j], out[i + 7, j] = s4, s5, s6, s7
+        for i in range(eights, n_rows):
+            total = bias[j]
+            for k in range(n_k):
+                total += x[i, k] * w[k, j]
+            out[i, j] = total
 
 
 @numba.njit(cache=True)
@@ -167,3 +199,41 @@ def features_backward(d_inputs, states, objects, length_scale, basis, cos_sin, d
             turned_a += d * basis[0, j]
             turned_b += d * basis[1, j]
         grad[i, 3] = cos_sin[i, 0] * turned_b - cos_sin[i, 1] * turned_a
+
+
+@numba.njit(cache=True)
+def cost(states, objects, length_scale, basis, layers, slope, cost_scale, offset, work, values):
+    """The whole learned cost of ``states`` into ``values``, in one call (no gradient).
+
+    ``layers`` is ``(W1^T, b1, W2^T, b2, W3^T, b3, W2, W1, w3, zeros(H), zeros(n_in))``
+    and ``work`` ``(inputs, cos_sin, distances, h1, a1, h2, a2, logits_column, slopes,
+    d_h2, d_h1, d_inputs)`` (:class:`~casa_core.learning.numpy_cost.NumpyStateCost`'s
+    arrays); :func:`features`, the three :func:`linear` layers with their leaky ReLUs and
+    :func:`costs`, as the separate calls would run them.
+    """
+    inputs, cos_sin, distances, h1, a1, h2, a2, column, slopes = work[:9]
+    features(states, objects, length_scale, basis, inputs, cos_sin, distances)
+    linear(inputs, layers[0], layers[1], h1)
+    leaky_relu(h1, slope, a1)
+    linear(a1, layers[2], layers[3], h2)
+    leaky_relu(h2, slope, a2)
+    linear(a2, layers[4], layers[5], column)
+    costs(column[:, 0], cost_scale, offset, values, slopes)
+
+
+@numba.njit(cache=True)
+def cost_and_gradient(
+    states, objects, length_scale, basis, layers, slope, cost_scale, offset, work, values, grad
+):
+    """:func:`cost` and the gradient ``grad`` ``(n, 4)`` of the costs' sum in the states.
+
+    The network's backward pass as autograd runs it (:func:`output_backward`, the two
+    transposed products, :func:`leaky_relu_backward`), then :func:`features_backward`.
+    """
+    cost(states, objects, length_scale, basis, layers, slope, cost_scale, offset, work, values)
+    inputs, cos_sin, distances, h1, a1, h2, a2, column, slopes, d_h2, d_h1, d_inputs = work
+    output_backward(slopes, layers[8], h2, slope, d_h2)
+    linear(d_h2, layers[6], layers[9], d_h1)
+    leaky_relu_backward(d_h1, h1, slope)
+    linear(d_h1, layers[7], layers[10], d_inputs)
+    features_backward(d_inputs, states, objects, length_scale, basis, cos_sin, distances, grad)

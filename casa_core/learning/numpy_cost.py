@@ -74,21 +74,16 @@ def _linear_layers(network: torch.nn.Sequential) -> tuple[list, float]:
     return layers, float(slopes.pop())
 
 
-class _Buffers:
-    """Work arrays for ``n`` rows."""
+def _work_arrays(n: int, n_inputs: int, hidden: int, k: int) -> tuple:
+    """The work arrays of ``n`` rows, in the order of :func:`_kernels.cost`'s ``work``."""
 
-    def __init__(self, n: int, n_inputs: int, hidden: int, k: int):
-        def new(*shape):
-            return np.empty(shape, dtype=np.float32)
+    def new(*shape):
+        return np.empty(shape, dtype=np.float32)
 
-        self.inputs, self.d_inputs = new(n, n_inputs), new(n, n_inputs)
-        self.h1, self.a1, self.h2, self.a2 = (new(n, hidden) for _ in range(4))
-        self.d_h2, self.d_h1 = new(n, hidden), new(n, hidden)
-        # The last layer writes a column; the sigmoid reads it as a vector.
-        self.logits_column = new(n, 1)
-        self.logits, self.slopes = self.logits_column.reshape(n), new(n)
-        self.cos_sin, self.distances = np.empty((n, 2)), np.empty((n, k))
-        self.no_slopes = self.slopes[:0]
+    features = (new(n, n_inputs), np.empty((n, 2)), np.empty((n, k)))
+    forward = tuple(new(n, hidden) for _ in range(4)) + (new(n, 1), new(n))
+    backward = (new(n, hidden), new(n, hidden), new(n, n_inputs))
+    return features + forward + backward
 
 
 class NumpyStateCost:
@@ -111,76 +106,69 @@ class NumpyStateCost:
 
     def __init__(self, network, *, objects, length_scale: float, cost_scale: float, offset=0.0):
         layers, slope = _linear_layers(network)
-        (self._w1, self._b1), (self._w2, self._b2), (w3, self._b3) = layers
-        # Transposed once, contiguous: the forward pass multiplies by W^T.
-        self._w1t, self._w2t = np.ascontiguousarray(self._w1.T), np.ascontiguousarray(self._w2.T)
-        self._w3t, self._w3 = np.ascontiguousarray(w3.T), w3[0]
-        self._no_bias_inputs = np.zeros(self._w1.shape[1], dtype=np.float32)
-        self._no_bias_hidden = np.zeros(self._w1.shape[0], dtype=np.float32)
+        (w1, b1), (w2, b2), (w3, b3) = layers
+        # The forward pass multiplies by W^T, the backward pass by W (contiguous copies).
+        self._layers = tuple(
+            np.ascontiguousarray(a) for a in (w1.T, b1, w2.T, b2, w3.T, b3, w2, w1, w3[0])
+        ) + (np.zeros(w1.shape[0], dtype=np.float32), np.zeros(w1.shape[1], dtype=np.float32))
+        self._shape = (w1.shape[1], w1.shape[0])  # inputs, hidden units
         # float32, as torch's leaky ReLU multiplies by it.
         self._slope = np.float32(slope)
         self.objects = np.ascontiguousarray(np.asarray(objects, dtype=float).reshape(-1, 3))
         self.length_scale = float(length_scale)
         self.cost_scale = float(cost_scale)
         self.offset = float(offset)
-        self._buffers: dict[int, _Buffers] = {}
+        self._buffers: dict[int, tuple] = {}
 
     def __getstate__(self):
         # A copy (deepcopy) gets its own, empty work arrays: they are scratch, not state.
         return {**self.__dict__, "_buffers": {}}
 
-    def _forward(self, states: np.ndarray, *, with_slopes: bool):
+    def _work(self, states) -> tuple[np.ndarray, tuple, tuple]:
+        """The flat states ``(n, 4)``, their leading shape and the work arrays of ``n`` rows."""
         states = np.asarray(states, dtype=float)
-        shape = states.shape[:-1]
         flat = np.ascontiguousarray(states.reshape(-1, 4))
         n = len(flat)
         work = self._buffers.get(n)
         if work is None:
             if len(self._buffers) >= _BUFFERED_SIZES:
                 self._buffers.clear()
-            work = self._buffers[n] = _Buffers(
-                n, self._w1.shape[1], self._w1.shape[0], len(self.objects)
-            )
-        _kernels.features(
-            flat,
-            self.objects,
-            self.length_scale,
-            _BASIS,
-            work.inputs,
-            work.cos_sin,
-            work.distances,
-        )
-        _kernels.linear(work.inputs, self._w1t, self._b1, work.h1)
-        _kernels.leaky_relu(work.h1, self._slope, work.a1)
-        _kernels.linear(work.a1, self._w2t, self._b2, work.h2)
-        _kernels.leaky_relu(work.h2, self._slope, work.a2)
-        _kernels.linear(work.a2, self._w3t, self._b3, work.logits_column)
-        values = np.empty(n)
-        slopes = work.slopes if with_slopes else work.no_slopes
-        _kernels.costs(work.logits, self.cost_scale, self.offset, values, slopes)
-        return values.reshape(shape), shape, flat, work
+            work = self._buffers[n] = _work_arrays(n, *self._shape, len(self.objects))
+        return flat, states.shape[:-1], work
 
     def __call__(self, states) -> np.ndarray:
         """Per-state costs ``(...)`` of states ``(..., 4)``."""
-        return self._forward(states, with_slopes=False)[0]
-
-    def value_and_grad(self, states) -> tuple[np.ndarray, np.ndarray]:
-        """Per-state costs ``(...)`` and the gradient of their sum in the states ``(..., 4)``."""
-        values, shape, flat, work = self._forward(states, with_slopes=True)
-        # The network's backward pass, as autograd computes it.
-        _kernels.output_backward(work.slopes, self._w3, work.h2, self._slope, work.d_h2)
-        _kernels.linear(work.d_h2, self._w2, self._no_bias_hidden, work.d_h1)
-        _kernels.leaky_relu_backward(work.d_h1, work.h1, self._slope)
-        _kernels.linear(work.d_h1, self._w1, self._no_bias_inputs, work.d_inputs)
-        grad = np.empty((len(flat), 4))
-        _kernels.features_backward(
-            work.d_inputs,
+        flat, shape, work = self._work(states)
+        values = np.empty(len(flat))
+        _kernels.cost(
             flat,
             self.objects,
             self.length_scale,
             _BASIS,
-            work.cos_sin,
-            work.distances,
+            self._layers,
+            self._slope,
+            self.cost_scale,
+            self.offset,
+            work,
+            values,
+        )
+        return values.reshape(shape)
+
+    def value_and_grad(self, states) -> tuple[np.ndarray, np.ndarray]:
+        """Per-state costs ``(...)`` and the gradient of their sum in the states ``(..., 4)``."""
+        flat, shape, work = self._work(states)
+        values, grad = np.empty(len(flat)), np.empty((len(flat), 4))
+        _kernels.cost_and_gradient(
+            flat,
+            self.objects,
+            self.length_scale,
+            _BASIS,
+            self._layers,
+            self._slope,
+            self.cost_scale,
+            self.offset,
+            work,
+            values,
             grad,
         )
-        return values, grad.reshape(*shape, 4)
+        return values.reshape(shape), grad.reshape(*shape, 4)

@@ -193,8 +193,13 @@ def python_linear(x, w, bias):
     return out
 
 
-# Odd and even row counts, inner sizes with and without a remainder of the 4-row blocks.
-@pytest.mark.parametrize("rows, inner, width", [(1, 3, 1), (2, 4, 5), (7, 9, 8), (10, 28, 17)])
+# Row counts with and without a remainder of the 4-row and 8-row blocks, inner sizes
+# with and without a remainder of the 4-term blocks, widths below 8 (the narrow path)
+# and above.
+@pytest.mark.parametrize(
+    "rows, inner, width",
+    [(1, 3, 1), (2, 4, 5), (7, 9, 8), (10, 28, 17), (13, 64, 1), (19, 12, 3), (6, 5, 9)],
+)
 def test_blocked_linear_equals_a_plain_loop_bit_for_bit(rows, inner, width):
     rng = np.random.default_rng(rows + inner)
     x, w = (rng.normal(size=shape).astype(np.float32) for shape in [(rows, inner), (inner, width)])
