@@ -6,7 +6,8 @@ its handlers: each loads its inputs once, calls the package and reports.
 - :mod:`~casa_core.cli.validate`: ``casa validate``
 - :mod:`~casa_core.cli.process`: ``casa process``
 - :mod:`~casa_core.cli.stats`: ``casa stats``
-- :mod:`~casa_core.cli.import_`: ``casa import`` (``import`` is a Python keyword)
+- :mod:`~casa_core.cli.import_`: ``casa import`` (``import`` is a Python keyword), its
+  ``rosbag`` format in :mod:`~casa_core.cli.import_rosbag`
 - :mod:`~casa_core.cli.teleop`: ``casa teleop``
 - :mod:`~casa_core.cli.bench`: ``casa bench``
 - :mod:`~casa_core.cli.session`: ``casa session``
@@ -19,6 +20,7 @@ its handlers: each loads its inputs once, calls the package and reports.
 - :mod:`~casa_core.cli.report`: ``casa report`` (its claims and robustness pages included)
 - :mod:`~casa_core.cli.power`: ``casa power``
 - :mod:`~casa_core.cli.progress`: ``casa progress``
+- :mod:`~casa_core.cli.ros2`: ``casa ros2`` (the ``ros2`` extra's nodes)
 
 An input that cannot be used (:class:`~casa_core.config.ConfigError`,
 :class:`~casa_core.scene.SceneError`, a bad table) ends the command with exit status 2
@@ -45,6 +47,7 @@ from casa_core.cli import (
     progress,
     replay,
     report,
+    ros2,
     session,
     simulate,
     stats,
@@ -100,6 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
         report,
         power,
         progress,
+        ros2,
     ):
         module.register(commands)
     for command in all_parsers(parser)[1:]:

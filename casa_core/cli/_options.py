@@ -15,6 +15,20 @@ def scene_option(command) -> None:
     )
 
 
+def trial_options(command) -> None:
+    """The options naming one trial a command records: ``--task``, ``--method``,
+    ``--participant``, ``--out`` and ``--phase``."""
+    from casa_core import vocabulary
+
+    command.add_argument("--task", required=True, choices=vocabulary.TASKS)
+    command.add_argument("--method", required=True, choices=vocabulary.METHODS)
+    command.add_argument("--participant", required=True, metavar="ID")
+    command.add_argument("--out", required=True, metavar="DIR", help="folder of the log")
+    command.add_argument(
+        "--phase", choices=vocabulary.PHASES, help="log phase (default: the task's first)"
+    )
+
+
 def dataset_scene_option(command, folder: str) -> None:
     """``--scene YAML`` of a command on a dataset ``folder`` (its metavar): see
     :func:`dataset_scene`."""

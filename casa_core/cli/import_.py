@@ -40,6 +40,9 @@ def register(commands) -> None:
         "--skip-bad", action="store_true", help="leave out (and list) files that cannot be read"
     )
     original.set_defaults(func=_import_original)
+    from casa_core.cli.import_rosbag import register_rosbag
+
+    register_rosbag(formats)
 
 
 def _import_original(args) -> int:

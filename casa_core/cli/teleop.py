@@ -10,6 +10,7 @@ from casa_core.cli._options import (
     nonnegative_int,
     positive_float,
     scene_option,
+    trial_options,
 )
 
 
@@ -29,13 +30,7 @@ def register(commands) -> None:
     from casa_core.assist.presets import DEFAULT_PRESET
     from casa_core.defaults import DEMONSTRATIONS, EPSILON
 
-    command.add_argument("--task", required=True, choices=vocabulary.TASKS)
-    command.add_argument("--method", required=True, choices=vocabulary.METHODS)
-    command.add_argument("--participant", required=True, metavar="ID")
-    command.add_argument("--out", required=True, metavar="DIR", help="folder of the log")
-    command.add_argument(
-        "--phase", choices=vocabulary.PHASES, help="log phase (default: the task's first)"
-    )
+    trial_options(command)
     scene_option(command)
     command.add_argument("--max-duration", type=positive_float, default=60.0, metavar="SECONDS")
     command.add_argument(

@@ -244,7 +244,13 @@ class ArmSimulation:
         action : array_like, shape (4,)
             ``[vx, vy, vz, vrot]`` in m/s and rad/s, base frame.
         """
-        qdot = self.joint_velocities(action)
+        return self.step_joints(self.joint_velocities(action))
+
+    def step_joints(self, qdot) -> np.ndarray:
+        """Drive the joints at velocities ``qdot`` (rad/s, seven) for one tick; return the
+        new state. What :meth:`step` does after its controller, and what a joint velocity
+        controller does with a command from outside (``casa ros2 sim``)."""
+        qdot = np.asarray(qdot, dtype=float)
         p.setJointMotorControlArray(
             self.robot,
             ARM_JOINTS,

@@ -178,22 +178,8 @@ def run_trial(
     if intents is None:
         intents = known_goal_intents(scene, **inference.goal_options())
     intents = list(intents)
-    teleop = scene.teleop
-    ticks_per_inference = int(round(DT / teleop.dt))
-    if ticks_per_inference < 1 or abs(ticks_per_inference * teleop.dt - DT) > 1e-9:
-        raise ValueError(
-            f"scene: teleop.dt = {teleop.dt} s must divide the inference period "
-            f"{DT} s into whole ticks"
-        )
-    assistant = Assistant(
-        intents,
-        arbitration=METHOD_ARBITRATION[method],
-        dt=DT,
-        speed=teleop.speed,
-        rot_speed=teleop.rot_speed,
-        tick=teleop.dt,
-        **{**inference.assistant_options(), **(assistant_options or {})},
-    )
+    ticks_per_inference = inference_ticks(scene)
+    assistant = trial_assistant(scene, method, intents, inference, assistant_options)
     own_sim = sim is None
     if sim is None:
         sim = ArmSimulation(scene)
@@ -204,20 +190,69 @@ def run_trial(
     finally:
         if own_sim:
             sim.close()
+    meta = trial_meta(
+        participant, task, method, phase, source_kind, assistant, inference, max_duration
+    )
+    if seed is not None:
+        meta["seed"] = int(seed)
+    return TrialResult(meta=meta, frame=pd.DataFrame(rows))
+
+
+def inference_ticks(scene: Scene) -> int:
+    """Control ticks per inference step; ValueError unless ``teleop.dt`` divides ``DT``."""
+    dt = scene.teleop.dt
+    ticks = int(round(DT / dt))
+    if ticks < 1 or abs(ticks * dt - DT) > 1e-9:
+        raise ValueError(
+            f"scene: teleop.dt = {dt} s must divide the inference period {DT} s into whole ticks"
+        )
+    return ticks
+
+
+def trial_assistant(
+    scene: Scene,
+    method: str,
+    intents: Sequence[Intent],
+    inference: Preset,
+    assistant_options: dict | None = None,
+) -> Assistant:
+    """The :class:`Assistant` of one trial: the method's arbitration, the scene's speeds and
+    tick, the preset's inference (``assistant_options`` over it)."""
+    teleop = scene.teleop
+    return Assistant(
+        intents,
+        arbitration=METHOD_ARBITRATION[method],
+        dt=DT,
+        speed=teleop.speed,
+        rot_speed=teleop.rot_speed,
+        tick=teleop.dt,
+        **{**inference.assistant_options(), **(assistant_options or {})},
+    )
+
+
+def trial_meta(
+    participant: str,
+    task: str,
+    method: str,
+    phase: str,
+    source_kind: str,
+    assistant: Assistant,
+    inference: Preset,
+    max_duration: float,
+) -> dict:
+    """A trial's casa-trial/1 metadata, what inference assumed included."""
     meta = {
         "participant": str(participant),
         "task": task,
         "method": method,
         "phase": phase,
         "source": source_kind,
-        "intents": [intent.name for intent in intents],
+        "intents": list(assistant.names),
         "max_duration": float(max_duration),  # so a reader can tell a trial that ran out
     }
     # What inference assumed, so that a replay can redo it (casa_core.analysis.replay).
     meta["inference"] = {"preset": inference.name, "evidence": assistant.evidence}
-    if seed is not None:
-        meta["seed"] = int(seed)
-    return TrialResult(meta=meta, frame=pd.DataFrame(rows))
+    return meta
 
 
 def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick):

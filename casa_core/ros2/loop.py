@@ -1,0 +1,193 @@
+"""The assistant's control loop on live inputs, without ROS: one call per control tick.
+
+:class:`AssistLoop` is what ``casa ros2 assist`` runs at 20 Hz. It takes the newest
+joint state and user command with the times they arrived, and returns the joint
+velocities to send, the ``casa/state`` text and the tick's log row. It is built as the
+in-process closed loop (:mod:`casa_core.study.closed_loop`) builds one trial: the same
+:class:`~casa_core.assist.assistant.Assistant`, inference every 0.5 s on the state
+reached, the same blend and the same casa-trial/1 metadata; only the arm is outside.
+
+The arm's state ``[x, y, z, rot]`` and the joint velocities realising the blended
+Cartesian action come from a headless :class:`~casa_core.robot.sim.ArmSimulation` put
+at the measured joint angles every tick: the simulated arm's own controller, without
+its reference pose (the real arm's position is measured, not integrated).
+
+Faults (:data:`~casa_core.ros2.messages.FAULTS`): with no fresh valid joint state the
+command is zero; with no fresh valid user command the user's action is zero and the
+robot's share is stopped (alpha 1), so the arm holds still. Either is logged once when
+it starts and once when it ends.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from casa_core.assist.presets import Preset
+from casa_core.robot.sim import ArmSimulation
+from casa_core.ros2.messages import (
+    FAULTS,
+    MAX_COMMAND_AGE,
+    MAX_JOINT_STATE_AGE,
+    action_keys,
+    state_json,
+)
+from casa_core.scene import Scene
+from casa_core.study.closed_loop import (
+    TrialResult,
+    inference_ticks,
+    known_goal_intents,
+    trial_assistant,
+    trial_meta,
+)
+
+
+@dataclass(frozen=True)
+class Tick:
+    """What one control tick sends: joint velocities, the ``casa/state`` text, the row."""
+
+    qdot: np.ndarray
+    state_text: str
+    row: dict
+    fault: str | None
+
+
+class AssistLoop:
+    """One assisted trial fed by live inputs, tick by tick.
+
+    Parameters
+    ----------
+    scene : Scene
+        The task scene: goals (the known intents), speeds, the tick.
+    task, method, participant, phase : str
+        The trial's conditions, as casa-trial/1 writes them.
+    inference : Preset
+        The inference preset.
+    log : callable, optional
+        ``log(text)`` for fault changes (the node's logger); default: nothing.
+    max_duration : float
+        Written to the metadata: the trial's time limit.
+    """
+
+    def __init__(
+        self,
+        scene: Scene,
+        *,
+        task: str,
+        method: str,
+        participant: str,
+        phase: str,
+        inference: Preset,
+        log: Callable[[str], None] | None = None,
+        max_duration: float = 60.0,
+    ):
+        self.scene = scene
+        self.speed, self.rot_speed = scene.teleop.speed, scene.teleop.rot_speed
+        intents = known_goal_intents(scene, **inference.goal_options())
+        self.assistant = trial_assistant(scene, method, intents, inference)
+        self.ticks_per_inference = inference_ticks(scene)
+        self.meta = trial_meta(
+            participant, task, method, phase, "human", self.assistant, inference, max_duration
+        )
+        self.model = ArmSimulation(scene)
+        self.log = log or (lambda text: None)
+        self.rows: list[dict] = []
+        self.tick_index = 0
+        self.fault: str | None = None
+        self._state: np.ndarray | None = None
+        names = self.assistant.names
+        self._beta = dict.fromkeys(names, 0.0)
+        self._belief = dict.fromkeys(names, 1.0 / len(names))
+        self._alpha = 1.0
+
+    def close(self) -> None:
+        """Free the kinematic model (pybullet)."""
+        self.model.close()
+
+    def _measure(self, q: np.ndarray) -> np.ndarray:
+        previous = self.scene.start_state if self._state is None else self._state
+        return self.model.reset(previous, q=q)
+
+    def step(
+        self,
+        now: float,
+        q: np.ndarray | None,
+        q_time: float | None,
+        action: np.ndarray | None,
+        action_time: float | None,
+        *,
+        joint_fault: str | None = None,
+        user_fault: str | None = None,
+    ) -> Tick:
+        """One control tick at monotonic time ``now`` (s).
+
+        ``q`` and ``action`` are the newest valid joint angles and user action and
+        ``q_time``, ``action_time`` when they arrived (None: never); ``joint_fault`` and
+        ``user_fault`` name a newer message that was refused (``joint-state-invalid``,
+        ``user-invalid``).
+        """
+        fault = joint_fault
+        if q is None or q_time is None or now - q_time > MAX_JOINT_STATE_AGE:
+            fault = fault or "joint-state-stale"
+        if fault is None and (
+            user_fault
+            or action is None
+            or action_time is None
+            or now - action_time > MAX_COMMAND_AGE
+        ):
+            fault = user_fault or "user-silent"
+        self._report(fault)
+        t = self.tick_index * self.scene.teleop.dt
+        if q is None:  # no arm yet: nothing to assist, nothing logged
+            return Tick(np.zeros(len(self.model.q)), state_json(t, 1.0, None, [], fault), {}, fault)
+        state = self._measure(q)
+        if self._state is None:
+            self.assistant.reset(state)
+        self._state = state
+        if self.tick_index > 0 and self.tick_index % self.ticks_per_inference == 0:
+            inference = self.assistant.update(state)
+            self._beta, self._belief, self._alpha = (
+                inference.beta,
+                inference.belief,
+                inference.alpha,
+            )
+        user = np.zeros(4) if fault or action is None else action
+        elapsed = (self.tick_index % self.ticks_per_inference) * self.scene.teleop.dt
+        # Under a fault the robot's share stops: alpha 1 applied, so the evidence sees none.
+        alpha = 1.0 if fault else self._alpha
+        blended = self.assistant.act(state, user, elapsed, alpha=alpha)
+        # Where the arm is, is unknown under a joint-state fault: no motion at all.
+        if (fault is not None and fault.startswith("joint-state")) or not np.any(blended):
+            qdot = np.zeros(len(q))
+        else:
+            qdot = self.model.joint_velocities(blended)
+        row = self._row(t, state, q, user, alpha)
+        self.rows.append(row)
+        self.tick_index += 1
+        text = state_json(t, alpha, self.assistant.latest, state, fault)
+        return Tick(qdot, text, row, fault)
+
+    def _row(self, t, state, q, user, alpha) -> dict:
+        x, y, z, rot = state.tolist()
+        row = {"t": round(t, 6), "x": x, "y": y, "z": z, "rot": rot}
+        row["keys"] = action_keys(user, self.speed, self.rot_speed)
+        row["alpha"] = alpha
+        row.update({f"q{i + 1}": float(v) for i, v in enumerate(q)})
+        row.update({f"beta:{name}": v for name, v in self._beta.items()})
+        row.update({f"belief:{name}": v for name, v in self._belief.items()})
+        return row
+
+    def _report(self, fault: str | None) -> None:
+        if fault != self.fault:
+            if fault is None:
+                self.log(f"{self.fault} over: assisting again")
+            else:
+                self.log(f"{fault}: {FAULTS[fault]}")
+            self.fault = fault
+
+    def result(self) -> TrialResult:
+        """The trial so far as casa-trial/1 metadata and rows."""
+        return TrialResult(meta=dict(self.meta), frame=pd.DataFrame(self.rows))

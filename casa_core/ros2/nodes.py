@@ -1,0 +1,201 @@
+"""The ROS 2 nodes: the simulated arm and the assistant behind the topics (needs rclpy).
+
+Both run a control loop of their own at :data:`~casa_core.ros2.messages.CONTROL_RATE`
+(20 Hz): they spin the node until the next tick's deadline, so that callbacks only
+store the newest message (and when it arrived, on this machine's monotonic clock, so
+that a remote publisher's clock never makes a message look fresh) and the tick does
+the work. The conversions and checks are :mod:`casa_core.ros2.messages`; the assistant's
+tick is :class:`casa_core.ros2.loop.AssistLoop`.
+
+QoS (``docs/ros2.md``): subscriptions are best effort, keep last 1, so that they match
+reliable and best-effort publishers alike and only the newest message waits; commands
+and state are published reliable, keep last 1 (what a ros2_control controller's
+subscription asks for); the trial's metadata is reliable and transient local, so that
+``ros2 bag record`` started late still gets it.
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import time
+from collections.abc import Callable
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import Twist
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray, String
+
+from casa_core.robot.kinematics import JOINT_MAX_SPEED
+from casa_core.robot.sim import ArmSimulation
+from casa_core.ros2.loop import AssistLoop
+from casa_core.ros2.messages import (
+    JOINT_COMMANDS_TOPIC,
+    JOINT_NAMES,
+    JOINT_STATES_TOPIC,
+    MAX_COMMAND_AGE,
+    STATE_TOPIC,
+    TRIAL_TOPIC,
+    USER_COMMAND_TOPIC,
+    MessageError,
+    joint_command,
+    joint_positions,
+    user_action,
+)
+from casa_core.ros2.stats import LoopStats
+
+#: Subscriptions: the newest message only, from any publisher.
+LATEST = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.BEST_EFFORT
+)
+#: Commands and state.
+COMMAND = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE
+)
+#: The trial's metadata, for late joiners.
+LATCHED = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+
+
+class Stop:
+    """Set by SIGINT or SIGTERM: the loops end at their next tick and write what they have."""
+
+    def __init__(self):
+        self.requested = False
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, self._handle)
+
+    def _handle(self, signum, frame) -> None:
+        self.requested = True
+
+
+def start(name: str, remaps: list[str]) -> Node:
+    """rclpy started with the remaps (``FROM:=TO``), our own signal handling, and a node."""
+    args = ["casa", "--ros-args"] + [part for remap in remaps for part in ("-r", remap)]
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    return Node(name)
+
+
+def run_loop(node: Node, period: float, tick: Callable[[float], None], stop: Stop, until: float):
+    """Call ``tick(now)`` every ``period`` s (monotonic) until ``stop`` or ``until``."""
+    deadline = time.monotonic()
+    while not stop.requested and time.monotonic() < until:
+        rclpy.spin_once(node, timeout_sec=max(deadline - time.monotonic(), 0.0))
+        now = time.monotonic()
+        if now >= deadline:
+            tick(now)
+            deadline += period
+            if deadline < now:  # a late tick is not made up: the next one is a period on
+                deadline = now + period
+
+
+def run_sim(scene, *, remaps: list[str], duration: float) -> int:
+    """``casa ros2 sim``: the pybullet JACO as a joint velocity controlled arm."""
+    node = start("casa_sim", remaps)
+    stop = Stop()
+    sim = ArmSimulation(scene)
+    latest: dict = {"qdot": None, "time": None}
+    holding = {"still": True}  # said once each time the commands stop
+
+    def on_command(message: Float64MultiArray) -> None:
+        try:
+            # Within the joints' speed limits, as the arm's own controller would hold them.
+            qdot = np.clip(joint_command(message.data), -JOINT_MAX_SPEED, JOINT_MAX_SPEED)
+        except MessageError as error:
+            node.get_logger().warning(
+                f"{JOINT_COMMANDS_TOPIC}: refused a command: {error}; holding still"
+            )
+            latest.update(qdot=None, time=None)
+            return
+        latest.update(qdot=qdot, time=time.monotonic())
+
+    node.create_subscription(Float64MultiArray, JOINT_COMMANDS_TOPIC, on_command, LATEST)
+    publisher = node.create_publisher(JointState, JOINT_STATES_TOPIC, COMMAND)
+    period = scene.teleop.dt
+
+    def tick(now: float) -> None:
+        fresh = latest["time"] is not None and now - latest["time"] <= MAX_COMMAND_AGE
+        if not fresh and latest["time"] is not None and not holding["still"]:
+            node.get_logger().warning(
+                f"{JOINT_COMMANDS_TOPIC}: no command for {MAX_COMMAND_AGE} s: holding still"
+            )
+        holding["still"] = not fresh
+        sim.step_joints(latest["qdot"] if fresh else np.zeros(len(JOINT_NAMES)))
+        message = JointState()
+        message.header.stamp = node.get_clock().now().to_msg()
+        message.name = list(JOINT_NAMES)
+        message.position = sim.q.tolist()
+        publisher.publish(message)
+
+    node.get_logger().info(
+        f"simulated JACO: {JOINT_STATES_TOPIC} at {1 / period:g} Hz, commands on "
+        f"{JOINT_COMMANDS_TOPIC}"
+    )
+    try:
+        run_loop(node, period, tick, stop, time.monotonic() + duration)
+    finally:
+        sim.close()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+def run_assist(loop: AssistLoop, *, remaps: list[str], duration: float, stats: LoopStats) -> None:
+    """``casa ros2 assist``: :class:`AssistLoop` on the topics until ``duration`` or a signal."""
+    node = start("casa_assist", remaps)
+    stop = Stop()
+    logger = node.get_logger()
+    loop.log = logger.warning
+    inputs: dict = {"q": None, "q_time": None, "joint_fault": None}
+    inputs |= {"action": None, "action_time": None, "user_fault": None}
+    speed, rot_speed = loop.speed, loop.rot_speed
+
+    def on_joints(message: JointState) -> None:
+        try:
+            inputs.update(q=joint_positions(message.name, message.position))
+            inputs.update(q_time=time.monotonic(), joint_fault=None)
+        except MessageError as error:
+            logger.warning(f"{JOINT_STATES_TOPIC}: refused a message: {error}")
+            inputs["joint_fault"] = "joint-state-invalid"
+
+    def on_user(message: Twist) -> None:
+        linear = (message.linear.x, message.linear.y, message.linear.z)
+        try:
+            inputs.update(action=user_action(linear, message.angular.z, speed, rot_speed))
+            inputs.update(action_time=time.monotonic(), user_fault=None)
+            stats.arrived(inputs["action_time"])
+        except MessageError as error:
+            logger.warning(f"{USER_COMMAND_TOPIC}: refused a message: {error}")
+            inputs["user_fault"] = "user-invalid"
+
+    node.create_subscription(JointState, JOINT_STATES_TOPIC, on_joints, LATEST)
+    node.create_subscription(Twist, USER_COMMAND_TOPIC, on_user, LATEST)
+    commands = node.create_publisher(Float64MultiArray, JOINT_COMMANDS_TOPIC, COMMAND)
+    states = node.create_publisher(String, STATE_TOPIC, COMMAND)
+    trial = node.create_publisher(String, TRIAL_TOPIC, LATCHED)
+    trial.publish(String(data=json.dumps(loop.meta, sort_keys=True)))
+
+    def tick(now: float) -> None:
+        result = loop.step(now, **inputs)
+        commands.publish(Float64MultiArray(data=result.qdot.tolist()))
+        states.publish(String(data=result.state_text))
+        stats.ticked(now, time.monotonic(), used=inputs["action_time"])
+
+    logger.info(
+        f"assisting ({loop.meta['task']}, {loop.meta['method']}): {JOINT_STATES_TOPIC} and "
+        f"{USER_COMMAND_TOPIC} in, {JOINT_COMMANDS_TOPIC} and {STATE_TOPIC} out"
+    )
+    try:
+        run_loop(node, loop.scene.teleop.dt, tick, stop, time.monotonic() + duration)
+        commands.publish(Float64MultiArray(data=[0.0] * len(JOINT_NAMES)))  # leave it still
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()

@@ -1,0 +1,129 @@
+"""Fault tests over DDS: ``casa ros2 assist`` in its own process, this test as the arm and
+the user. The user stops, the joint states stop, a joint state with the wrong joint
+count or a NaN, a NaN user command: each gives the documented ``casa/state`` fault, a
+zero command, a log line, and the node goes on (and writes its trial at the end).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+import pytest
+
+from casa_core.io import read_trial
+from casa_core.robot import kinematics as kin
+from casa_core.ros2.messages import JOINT_NAMES
+from tests.ros2.ros_processes import casa, ros_env, stop
+
+rclpy = pytest.importorskip("rclpy", reason="the ros2 extra is not installed")
+
+
+class Harness:
+    """This test's node: publishes joint states and user commands, hears the assistant."""
+
+    def __init__(self, env: dict):
+        from geometry_msgs.msg import Twist
+        from sensor_msgs.msg import JointState
+        from std_msgs.msg import Float64MultiArray, String
+
+        self.Twist, self.JointState = Twist, JointState
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=int(env["ROS_DOMAIN_ID"]))
+        self.node = rclpy.create_node("fault_harness", context=self.context)
+        self.joints = self.node.create_publisher(JointState, "joint_states", 1)
+        self.user = self.node.create_publisher(Twist, "cmd_vel", 1)
+        self.states: list[dict] = []
+        self.commands: list[list[float]] = []
+        self.node.create_subscription(
+            String, "casa/state", lambda m: self.states.append(json.loads(m.data)), 10
+        )
+        self.node.create_subscription(
+            Float64MultiArray,
+            "velocity_controller/commands",
+            lambda m: self.commands.append(list(m.data)),
+            10,
+        )
+        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def run(self, seconds: float, *, names=JOINT_NAMES, positions=None, twist=(0.05, 0, 0, 0)):
+        """Publish for ``seconds`` at 20 Hz (None: that topic stays silent)."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            if positions is not None:
+                message = self.JointState(name=list(names), position=list(positions))
+                self.joints.publish(message)
+            if twist is not None:
+                message = self.Twist()
+                message.linear.x, message.linear.y, message.linear.z = twist[:3]
+                message.angular.z = float(twist[3])
+                self.user.publish(message)
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def close(self):
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+
+def test_faults_stop_the_robot_and_are_logged(tmp_path, scene, monkeypatch):
+    env = ros_env()
+    # rclpy in this process reads the environment too (the domain is given to it).
+    for name in ("RMW_IMPLEMENTATION", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
+        monkeypatch.setenv(name, env[name])
+    q = kin.inverse_kinematics(np.asarray(scene.start_state[:3]), scene.start_state[3])
+    out = tmp_path / "P09"
+    args = ["ros2", "assist", "--task", "known_goal", "--method", "CASA"]
+    args += ["--participant", "P09", "--out", str(out), "--duration", "30"]
+    assist = casa(args, env, tmp_path / "assist.log")
+    harness = Harness(env)
+    phases = {}
+    try:
+
+        def phase(name, seconds, **kwargs):
+            start = len(harness.states)
+            harness.run(seconds, **kwargs)
+            phases[name] = harness.states[start:]
+
+        # The node's start and DDS discovery: until it says it assists (at most 30 s).
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not (
+            harness.states and harness.states[-1]["fault"] is None
+        ):
+            harness.run(0.5, positions=q)
+        assert harness.states and harness.states[-1]["fault"] is None, harness.states[-3:]
+        phase("healthy", 2.0, positions=q)
+        phase("user silent", 1.5, positions=q, twist=None)
+        phase("joint states stop", 1.0, positions=None)
+        phase("wrong joint count", 1.0, names=JOINT_NAMES[:6], positions=q[:6])
+        phase("NaN joint", 1.0, positions=[np.nan, *q[1:]])
+        phase("NaN user command", 1.0, positions=q, twist=(np.nan, 0, 0, 0))
+        phase("recovered", 1.5, positions=q)
+    finally:
+        harness.close()
+        stop([assist])
+    log = (tmp_path / "assist.log").read_text()
+    assert assist.returncode == 0, log
+
+    def faults(name):
+        return [state["fault"] for state in phases[name][8:]]  # past the change-over (5 ticks)
+
+    assert set(faults("healthy")) == {None}, phases["healthy"]
+    expected = {
+        "user silent": "user-silent",
+        "wrong joint count": "joint-state-invalid",
+        "NaN joint": "joint-state-invalid",
+        "joint states stop": "joint-state-stale",
+        "NaN user command": "user-invalid",
+    }
+    for name, fault in expected.items():
+        assert set(faults(name)) == {fault}, (name, faults(name))
+        assert all(state["alpha"] == 1.0 for state in phases[name][8:]), name
+        assert f"{fault}: " in log, (fault, log)
+    assert set(faults("recovered")) == {None}
+    assert "joints joint_7 missing" in log and "non-finite position of joint_1" in log
+    # A fault's ticks send zero velocities; healthy ones move the arm.
+    assert any(np.any(command) for command in harness.commands)
+    meta, frame = read_trial(out / "known_goal_no_misspecification_CASA")
+    assert (frame["alpha"] <= 1).all() and len(frame) > 100
