@@ -345,23 +345,31 @@ class Assistant:
         return velocity
 
     def act(
-        self, state, user_action, elapsed_in_step: float = 0.0, *, alpha: float | None = None
+        self,
+        state,
+        user_action,
+        elapsed_in_step: float = 0.0,
+        *,
+        alpha: float | None = None,
+        record: bool = True,
     ) -> np.ndarray:
         """The blended action alpha T(a) + (1 - alpha) u*, applied even with no key held.
 
         Before the first inference step the user has full control. ``alpha``, if
         given, is the authority actually applied this tick instead of the latest
         inference's: replaying a log (:mod:`casa_core.analysis.replay`) gives the logged one,
-        so that the robot's share removed from the evidence is the share it had.
+        so that the robot's share removed from the evidence is the share it had. With
+        ``record=False`` the blend is only computed, not applied: nothing is kept for the
+        evidence (a live node answering a command between two ticks, :mod:`casa_core.ros2`).
         """
         self._require_reset("act")
         user_action = np.asarray(user_action, dtype=float)
-        if user_action.any():
+        if record and user_action.any():
             self._user_input = True
         if self.latest is None:
             return user_action.copy()
         robot = self.robot_action(state, elapsed_in_step)
         alpha = self.latest.alpha if alpha is None else float(alpha)
-        if self.evidence == "commanded" and alpha < 1.0:
+        if record and self.evidence == "commanded" and alpha < 1.0:
             self._robot_motion += (1.0 - alpha) * (robot - user_action) * self.tick
         return blend(alpha, user_action, robot)

@@ -11,6 +11,7 @@ import sys
 
 from casa_core import vocabulary
 from casa_core.cli._options import example, positive_float, scene_option, trial_options
+from casa_core.ros2.parameters import PARAMETERS
 
 #: What to run when the ROS 2 packages are missing.
 INSTALL = 'pip install -e ".[ros2]"'
@@ -48,10 +49,13 @@ def register(commands) -> None:
         "records the trial",
         description="Takes the arm's joint_states (sensor_msgs/JointState) and the user's "
         "cmd_vel (geometry_msgs/Twist: linear x, y, z in m/s in the base frame, angular z "
-        "the wrist turn in rad/s), publishes the blended joint velocities on "
-        "velocity_controller/commands and the assistant's state on casa/state "
-        "(std_msgs/String, JSON), at 20 Hz. Writes OUT/<task>_<phase>_<method>.json and "
-        ".csv (casa-trial/1) at --duration or on SIGINT.",
+        "the wrist turn in rad/s; or TwistStamped, or sensor_msgs/Joy on joy, by the "
+        "user_input parameter), publishes the blended joint velocities on "
+        "velocity_controller/commands (and, with twist_output, a TwistStamped on "
+        "servo_node/delta_twist_cmds) on each user command and at 20 Hz, and the "
+        "assistant's state on casa/state (std_msgs/String, JSON). Writes "
+        "OUT/<task>_<phase>_<method>.json and .csv (casa-trial/1) at --duration or on "
+        "SIGINT. Parameters (docs/ros2.md): " + ", ".join(PARAMETERS) + ".",
         **example(
             "casa ros2 assist --task known_goal --method CASA --participant P01 "
             "--out data/raw/lab/P01 --duration 60"
@@ -61,6 +65,26 @@ def register(commands) -> None:
 
     trial_options(assist)
     assist.add_argument("--preset", choices=vocabulary.PRESET_NAMES, default=DEFAULT_PRESET)
+    assist.add_argument(
+        "--intent",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="a learned intent (casa-intent file) the robot also knows; repeatable "
+        "(for the after_learning phase)",
+    )
+    assist.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME:=VALUE",
+        help="set a node parameter, as ros2 run's -p does; repeatable",
+    )
+    assist.add_argument(
+        "--params-file",
+        metavar="YAML",
+        help="a ROS 2 parameters file (section casa_assist or /**)",
+    )
     scene_option(assist)
     _common(assist)
     assist.set_defaults(func=_assist)
@@ -128,35 +152,48 @@ def _assist(args) -> int:
     from casa_core.io import LogError, trial_files
     from casa_core.ros2.loop import AssistLoop
     from casa_core.ros2.nodes import run_assist
+    from casa_core.ros2.parameters import ParameterError, check_overrides
     from casa_core.ros2.stats import LoopStats
     from casa_core.scene import load_scene
     from casa_core.study.closed_loop import default_phase
 
     scene = load_scene(args.scene)  # a SceneError is reported by casa_core.cli.main
-    phase = args.phase or default_phase(args.task)
+    try:
+        check_overrides(args.param, args.params_file)
+        phase = args.phase or default_phase(args.task)
+    except (ParameterError, ValueError) as error:
+        print(f"casa ros2 assist: {error}", file=sys.stderr)
+        return 2
     stem = Path(args.out) / f"{args.task}_{phase}_{args.method}"
     existing = [path for path in trial_files(stem) if path.exists()]
     if existing:
         print(f"casa ros2 assist: {existing[0]} exists; not replaced", file=sys.stderr)
         return 2
-    try:
-        loop = AssistLoop(
+    ros_args = [part for param in args.param for part in ("-p", param)]
+    ros_args += ["--params-file", str(args.params_file)] if args.params_file else []
+
+    def make_loop(parameters) -> AssistLoop:
+        return AssistLoop(
             scene,
             task=args.task,
             method=args.method,
             participant=args.participant,
             phase=phase,
             inference=preset(args.preset),
+            learned=args.intent,
             max_duration=args.duration,
+            max_command_age=parameters.max_command_age,
+            max_joint_state_age=parameters.max_joint_state_age,
         )
-    except ValueError as error:  # a task, phase and method that casa-trial/1 refuses
-        print(f"casa ros2 assist: {error}", file=sys.stderr)
-        return 2
+
     stats = LoopStats()
     try:
-        run_assist(loop, remaps=args.remap, duration=args.duration, stats=stats)
-    finally:
-        loop.close()
+        loop = run_assist(
+            make_loop, remaps=args.remap, ros_args=ros_args, duration=args.duration, stats=stats
+        )
+    except ValueError as error:  # a parameter, a learned intent or a trial casa-trial/1 refuses
+        print(f"casa ros2 assist: {error}", file=sys.stderr)
+        return 2
     print(f"casa ros2 assist: {stats.text()}")
     try:
         loop.result().write(stem)

@@ -12,6 +12,11 @@ Cartesian action come from a headless :class:`~casa_core.robot.sim.ArmSimulation
 at the measured joint angles every tick: the simulated arm's own controller, without
 its reference pose (the real arm's position is measured, not integrated).
 
+Between two ticks, :meth:`AssistLoop.respond` answers a user command the moment it
+arrives, with the same blend from the newest joint state and the last inference, so that
+a command acts within the compute time and not a tick later; only the tick records,
+counts evidence and infers.
+
 Faults (:data:`~casa_core.ros2.messages.FAULTS`): with no fresh valid joint state the
 command is zero; with no fresh valid user command the user's action is zero and the
 robot's share is stopped (alpha 1), so the arm holds still. Either is logged once when
@@ -20,8 +25,9 @@ it starts and once when it ends.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -39,20 +45,33 @@ from casa_core.scene import Scene
 from casa_core.study.closed_loop import (
     TrialResult,
     inference_ticks,
-    known_goal_intents,
     trial_assistant,
+    trial_intents,
     trial_meta,
 )
 
 
 @dataclass(frozen=True)
-class Tick:
-    """What one control tick sends: joint velocities, the ``casa/state`` text, the row."""
+class Command:
+    """What the arm is sent: joint velocities (rad/s) and the blended action they realise."""
 
     qdot: np.ndarray
+    blended: np.ndarray
+
+
+@dataclass(frozen=True)
+class Tick:
+    """What one control tick sends: the command, the ``casa/state`` text, the row."""
+
+    command: Command
     state_text: str
     row: dict
     fault: str | None
+
+    @property
+    def qdot(self) -> np.ndarray:
+        """The command's joint velocities."""
+        return self.command.qdot
 
 
 class AssistLoop:
@@ -66,10 +85,15 @@ class AssistLoop:
         The trial's conditions, as casa-trial/1 writes them.
     inference : Preset
         The inference preset.
+    learned : sequence of path, optional
+        Learned intent files (casa-intent) the robot knows besides the known goals (after
+        learning), as ``casa teleop --intent``.
     log : callable, optional
         ``log(text)`` for fault changes (the node's logger); default: nothing.
     max_duration : float
         Written to the metadata: the trial's time limit.
+    max_command_age, max_joint_state_age : float
+        The stated ages (s) beyond which a user command or a joint state is not used.
     """
 
     def __init__(
@@ -81,12 +105,16 @@ class AssistLoop:
         participant: str,
         phase: str,
         inference: Preset,
+        learned: Sequence[Path | str] = (),
         log: Callable[[str], None] | None = None,
         max_duration: float = 60.0,
+        max_command_age: float = MAX_COMMAND_AGE,
+        max_joint_state_age: float = MAX_JOINT_STATE_AGE,
     ):
         self.scene = scene
         self.speed, self.rot_speed = scene.teleop.speed, scene.teleop.rot_speed
-        intents = known_goal_intents(scene, **inference.goal_options())
+        self.max_command_age, self.max_joint_state_age = max_command_age, max_joint_state_age
+        intents = trial_intents(scene, learned, inference=inference)
         self.assistant = trial_assistant(scene, method, intents, inference)
         self.ticks_per_inference = inference_ticks(scene)
         self.meta = trial_meta(
@@ -102,6 +130,7 @@ class AssistLoop:
         self._beta = dict.fromkeys(names, 0.0)
         self._belief = dict.fromkeys(names, 1.0 / len(names))
         self._alpha = 1.0
+        self._last_tick: tuple[float, float] | None = None  # (now, elapsed in the step)
 
     def close(self) -> None:
         """Free the kinematic model (pybullet)."""
@@ -130,19 +159,20 @@ class AssistLoop:
         ``user-invalid``).
         """
         fault = joint_fault
-        if q is None or q_time is None or now - q_time > MAX_JOINT_STATE_AGE:
+        if q is None or q_time is None or now - q_time > self.max_joint_state_age:
             fault = fault or "joint-state-stale"
         if fault is None and (
             user_fault
             or action is None
             or action_time is None
-            or now - action_time > MAX_COMMAND_AGE
+            or now - action_time > self.max_command_age
         ):
             fault = user_fault or "user-silent"
         self._report(fault)
         t = self.tick_index * self.scene.teleop.dt
         if q is None:  # no arm yet: nothing to assist, nothing logged
-            return Tick(np.zeros(len(self.model.q)), state_json(t, 1.0, None, [], fault), {}, fault)
+            text = state_json(t, 1.0, None, [], fault)
+            return Tick(self._still(), text, {}, fault)
         state = self._measure(q)
         if self._state is None:
             self.assistant.reset(state)
@@ -156,19 +186,47 @@ class AssistLoop:
             )
         user = np.zeros(4) if fault or action is None else action
         elapsed = (self.tick_index % self.ticks_per_inference) * self.scene.teleop.dt
+        self._last_tick = (now, elapsed)
         # Under a fault the robot's share stops: alpha 1 applied, so the evidence sees none.
         alpha = 1.0 if fault else self._alpha
-        blended = self.assistant.act(state, user, elapsed, alpha=alpha)
-        # Where the arm is, is unknown under a joint-state fault: no motion at all.
-        if (fault is not None and fault.startswith("joint-state")) or not np.any(blended):
-            qdot = np.zeros(len(q))
+        if fault is not None and fault.startswith("joint-state"):
+            command = self._still()  # where the arm is, is unknown: no motion at all
         else:
-            qdot = self.model.joint_velocities(blended)
+            command = self._command(state, user, elapsed, alpha, record=True)
         row = self._row(t, state, q, user, alpha)
         self.rows.append(row)
         self.tick_index += 1
         text = state_json(t, alpha, self.assistant.latest, state, fault)
-        return Tick(qdot, text, row, fault)
+        return Tick(command, text, row, fault)
+
+    def respond(
+        self, now: float, q: np.ndarray | None, q_time: float | None, action: np.ndarray
+    ) -> Command | None:
+        """The command for a user ``action`` arriving at ``now`` between two ticks.
+
+        The same blend as the next tick's, from the newest joint state ``q`` (arrived at
+        ``q_time``) and the last inference, so that a command acts at once; nothing is
+        recorded or counted as evidence (the next tick does that). None while the last
+        tick had a fault, before the first tick, or with no fresh joint state: then the
+        next tick decides.
+        """
+        if self._last_tick is None or self.fault is not None:
+            return None
+        if q is None or q_time is None or now - q_time > self.max_joint_state_age:
+            return None
+        tick_time, elapsed = self._last_tick
+        state = self._measure(q)
+        elapsed += min(max(now - tick_time, 0.0), self.scene.teleop.dt)
+        return self._command(state, action, elapsed, self._alpha, record=False)
+
+    def _command(self, state, user, elapsed, alpha, *, record: bool) -> Command:
+        blended = self.assistant.act(state, user, elapsed, alpha=alpha, record=record)
+        if not np.any(blended):
+            return self._still()
+        return Command(self.model.joint_velocities(blended), blended)
+
+    def _still(self) -> Command:
+        return Command(np.zeros(len(self.model.q)), np.zeros(4))
 
     def _row(self, t, state, q, user, alpha) -> dict:
         x, y, z, rot = state.tolist()

@@ -35,9 +35,19 @@ JOINT_NAMES = tuple(f"joint_{i}" for i in range(1, N_JOINTS + 1))
 JOINT_STATES_TOPIC = "joint_states"
 JOINT_COMMANDS_TOPIC = "velocity_controller/commands"
 USER_COMMAND_TOPIC = "cmd_vel"
+#: The user's command as a joystick's ``sensor_msgs/Joy`` (joy_node's topic).
+JOY_TOPIC = "joy"
+#: The optional Cartesian output: MoveIt Servo's input (``geometry_msgs/TwistStamped``).
+TWIST_OUTPUT_TOPIC = "servo_node/delta_twist_cmds"
 STATE_TOPIC = "casa/state"
 #: The trial's metadata (task, method, phase, ...), latched for ``ros2 bag record``.
 TRIAL_TOPIC = "casa/trial"
+
+#: The ``Joy.axes`` read as ``[x, y, z, rot]`` by default: joy's game_controller_node
+#: layout (0 left stick horizontal, 1 left stick vertical, 2 right stick horizontal,
+#: 3 right stick vertical; left and up positive): the left stick moves the tool forward,
+#: back and sideways, the right stick up and down and turns the wrist.
+JOY_AXES = (1, 0, 3, 2)
 
 #: A user command older than this (s) is not acted on: five control ticks (a keyboard or
 #: joystick driver publishing at 20 Hz may drop four messages in a row).
@@ -133,6 +143,53 @@ def user_action(
         raise MessageError(f"a user command must be 4 finite numbers, got {values}")
     limits = np.array([speed, speed, speed, rot_speed])
     return np.clip(np.array(values), -limits, limits)
+
+
+def joy_action(
+    axes: Sequence[float],
+    buttons: Sequence[int],
+    *,
+    axis_map: Sequence[int] = JOY_AXES,
+    scales: Sequence[float] = (1.0, 1.0, 1.0, 1.0),
+    enable_button: int = -1,
+    speed: float = SPEED,
+    rot_speed: float = ROT_SPEED,
+) -> np.ndarray:
+    """The user's action ``[vx, vy, vz, vrot]`` from a joystick's axes and buttons.
+
+    Axis ``axis_map[i]`` (in [-1, 1], clipped) times ``scales[i]`` is the fraction of a
+    key's speed on action axis ``i``. With ``enable_button`` >= 0 the sticks count only
+    while that button is held; otherwise the action is zero (a user holding still).
+
+    Raises
+    ------
+    MessageError
+        On too few axes or buttons for the map, or a non-finite axis.
+
+    Examples
+    --------
+    >>> joy_action([0.0, 1.0, 0.0, -0.5], [], speed=0.05).tolist()
+    [0.05, 0.0, -0.025, 0.0]
+    >>> joy_action([0.0, 1.0, 0.0, -0.5], [0, 0], enable_button=1).tolist()
+    [0.0, 0.0, 0.0, 0.0]
+    """
+    axes = [float(v) for v in axes]
+    needed = max(axis_map) + 1
+    if len(axes) < needed:
+        raise MessageError(f"{len(axes)} axes, the axis map {list(axis_map)} needs {needed}")
+    if enable_button >= 0:
+        if len(buttons) <= enable_button:
+            raise MessageError(
+                f"{len(buttons)} buttons, the enable button is number {enable_button}"
+            )
+        if not buttons[enable_button]:
+            return np.zeros(4)
+    picked = [axes[i] for i in axis_map]
+    if not all(math.isfinite(v) for v in picked):
+        raise MessageError(f"a non-finite axis: {picked}")
+    fractions = np.clip(picked, -1.0, 1.0) * np.asarray(scales, dtype=float)
+    limits = np.array([speed, speed, speed, rot_speed])
+    return np.clip(fractions * limits, -limits, limits)
 
 
 def action_keys(action, speed: float = SPEED, rot_speed: float = ROT_SPEED) -> str:

@@ -19,33 +19,39 @@ from __future__ import annotations
 import json
 import signal
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import rclpy
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import Twist, TwistStamped
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.exceptions import InvalidParameterTypeException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import JointState, Joy
 from std_msgs.msg import Float64MultiArray, String
 
 from casa_core.robot.kinematics import JOINT_MAX_SPEED
 from casa_core.robot.sim import ArmSimulation
-from casa_core.ros2.loop import AssistLoop
+from casa_core.ros2.loop import AssistLoop, Command
 from casa_core.ros2.messages import (
     JOINT_COMMANDS_TOPIC,
     JOINT_NAMES,
     JOINT_STATES_TOPIC,
+    JOY_TOPIC,
     MAX_COMMAND_AGE,
     STATE_TOPIC,
     TRIAL_TOPIC,
+    TWIST_OUTPUT_TOPIC,
     USER_COMMAND_TOPIC,
     MessageError,
     joint_command,
     joint_positions,
+    joy_action,
     user_action,
 )
+from casa_core.ros2.parameters import PARAMETERS, NodeParameters, ParameterError, node_parameters
 from casa_core.ros2.stats import LoopStats
 
 #: Subscriptions: the newest message only, from any publisher.
@@ -77,9 +83,11 @@ class Stop:
         self.requested = True
 
 
-def start(name: str, remaps: list[str]) -> Node:
-    """rclpy started with the remaps (``FROM:=TO``), our own signal handling, and a node."""
+def start(name: str, remaps: list[str], ros_args: Sequence[str] = ()) -> Node:
+    """rclpy started with the remaps (``FROM:=TO``) and other ROS arguments (``-p``,
+    ``--params-file``), our own signal handling, and a node."""
     args = ["casa", "--ros-args"] + [part for remap in remaps for part in ("-r", remap)]
+    args += list(ros_args)
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     return Node(name)
 
@@ -148,15 +156,66 @@ def run_sim(scene, *, remaps: list[str], duration: float) -> int:
     return 0
 
 
-def run_assist(loop: AssistLoop, *, remaps: list[str], duration: float, stats: LoopStats) -> None:
-    """``casa ros2 assist``: :class:`AssistLoop` on the topics until ``duration`` or a signal."""
-    node = start("casa_assist", remaps)
+def run_assist(
+    make_loop: Callable[[NodeParameters], AssistLoop],
+    *,
+    remaps: list[str],
+    ros_args: list[str],
+    duration: float,
+    stats: LoopStats,
+) -> AssistLoop:
+    """``casa ros2 assist``: an :class:`AssistLoop` on the topics until ``duration`` or a signal.
+
+    ``make_loop`` builds the loop from the node's parameters (:mod:`casa_core.ros2.parameters`,
+    set by ``ros_args``: ``-p NAME:=VALUE``, ``--params-file FILE``); the loop is returned
+    closed, with the trial it recorded. Each user command is answered on arrival
+    (:meth:`AssistLoop.respond`); the 20 Hz tick records, infers and publishes the state.
+
+    Raises
+    ------
+    ParameterError
+        Naming a parameter whose value breaks its rule (nothing has been published).
+    """
+    node = start("casa_assist", remaps, ros_args)
+    try:
+        parameters = node_parameters(_declared(node))
+        loop = make_loop(parameters)
+    except BaseException:
+        node.destroy_node()
+        rclpy.try_shutdown()
+        raise
+    try:
+        _assist(node, loop, parameters, duration, stats)
+    finally:
+        loop.close()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return loop
+
+
+def _declared(node: Node) -> dict:
+    """The values of :data:`PARAMETERS` on ``node``, declared read-only with their defaults."""
+    values = {}
+    for name, (default, description) in PARAMETERS.items():
+        descriptor = ParameterDescriptor(description=description, read_only=True)
+        try:
+            value = node.declare_parameter(name, default, descriptor).value
+        except InvalidParameterTypeException as error:
+            raise ParameterError(
+                f"parameter {name}: the wrong type ({error}); the default is {default!r}"
+            ) from None
+        values[name] = value if isinstance(value, str | bool | int | float) else list(value)
+    return values
+
+
+def _assist(node: Node, loop: AssistLoop, parameters: NodeParameters, duration, stats) -> None:
     stop = Stop()
     logger = node.get_logger()
     loop.log = logger.warning
     inputs: dict = {"q": None, "q_time": None, "joint_fault": None}
     inputs |= {"action": None, "action_time": None, "user_fault": None}
     speed, rot_speed = loop.speed, loop.rot_speed
+    send = _outputs(node, parameters)
 
     def on_joints(message: JointState) -> None:
         try:
@@ -166,36 +225,96 @@ def run_assist(loop: AssistLoop, *, remaps: list[str], duration: float, stats: L
             logger.warning(f"{JOINT_STATES_TOPIC}: refused a message: {error}")
             inputs["joint_fault"] = "joint-state-invalid"
 
-    def on_user(message: Twist) -> None:
-        linear = (message.linear.x, message.linear.y, message.linear.z)
+    def on_user(topic: str, read: Callable[[], np.ndarray]) -> None:
         try:
-            inputs.update(action=user_action(linear, message.angular.z, speed, rot_speed))
-            inputs.update(action_time=time.monotonic(), user_fault=None)
-            stats.arrived(inputs["action_time"])
+            action = read()
         except MessageError as error:
-            logger.warning(f"{USER_COMMAND_TOPIC}: refused a message: {error}")
+            logger.warning(f"{topic}: refused a message: {error}")
             inputs["user_fault"] = "user-invalid"
+            return
+        arrived = time.monotonic()
+        inputs.update(action=action, action_time=arrived, user_fault=None)
+        stats.arrived(arrived)
+        if inputs["joint_fault"] is None:
+            command = loop.respond(arrived, inputs["q"], inputs["q_time"], action)
+            if command is not None:
+                send(command)
+                stats.published(time.monotonic(), used=arrived)
 
+    user_topic = _user_input(node, parameters, on_user, speed, rot_speed)
     node.create_subscription(JointState, JOINT_STATES_TOPIC, on_joints, LATEST)
-    node.create_subscription(Twist, USER_COMMAND_TOPIC, on_user, LATEST)
-    commands = node.create_publisher(Float64MultiArray, JOINT_COMMANDS_TOPIC, COMMAND)
     states = node.create_publisher(String, STATE_TOPIC, COMMAND)
     trial = node.create_publisher(String, TRIAL_TOPIC, LATCHED)
     trial.publish(String(data=json.dumps(loop.meta, sort_keys=True)))
 
     def tick(now: float) -> None:
         result = loop.step(now, **inputs)
-        commands.publish(Float64MultiArray(data=result.qdot.tolist()))
+        send(result.command)
         states.publish(String(data=result.state_text))
         stats.ticked(now, time.monotonic(), used=inputs["action_time"])
 
+    outputs = [JOINT_COMMANDS_TOPIC] if parameters.joint_output else []
+    outputs += [TWIST_OUTPUT_TOPIC] if parameters.twist_output else []
     logger.info(
         f"assisting ({loop.meta['task']}, {loop.meta['method']}): {JOINT_STATES_TOPIC} and "
-        f"{USER_COMMAND_TOPIC} in, {JOINT_COMMANDS_TOPIC} and {STATE_TOPIC} out"
+        f"{user_topic} ({parameters.user_input}) in, {', '.join(outputs)} and {STATE_TOPIC} out"
     )
-    try:
-        run_loop(node, loop.scene.teleop.dt, tick, stop, time.monotonic() + duration)
-        commands.publish(Float64MultiArray(data=[0.0] * len(JOINT_NAMES)))  # leave it still
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    run_loop(node, loop.scene.teleop.dt, tick, stop, time.monotonic() + duration)
+    send(None)  # leave the arm still
+
+
+def _user_input(node, parameters: NodeParameters, on_user, speed, rot_speed) -> str:
+    """Subscribe to the user's command of the ``user_input`` parameter; return its topic."""
+    if parameters.user_input == "joy":
+
+        def on_joy(message: Joy) -> None:
+            on_user(
+                JOY_TOPIC,
+                lambda: joy_action(
+                    message.axes,
+                    message.buttons,
+                    axis_map=parameters.joy_axes,
+                    scales=parameters.joy_scales,
+                    enable_button=parameters.joy_enable_button,
+                    speed=speed,
+                    rot_speed=rot_speed,
+                ),
+            )
+
+        node.create_subscription(Joy, JOY_TOPIC, on_joy, LATEST)
+        return JOY_TOPIC
+    stamped = parameters.user_input == "twist_stamped"
+
+    def on_twist(message) -> None:
+        twist = message.twist if stamped else message
+        linear = (twist.linear.x, twist.linear.y, twist.linear.z)
+        on_user(USER_COMMAND_TOPIC, lambda: user_action(linear, twist.angular.z, speed, rot_speed))
+
+    kind = TwistStamped if stamped else Twist
+    node.create_subscription(kind, USER_COMMAND_TOPIC, on_twist, LATEST)
+    return USER_COMMAND_TOPIC
+
+
+def _outputs(node: Node, parameters: NodeParameters) -> Callable[[Command | None], None]:
+    """``send(command)``: publish a command on the outputs the parameters ask for (None: stop)."""
+    joints = twist = None
+    if parameters.joint_output:
+        joints = node.create_publisher(Float64MultiArray, JOINT_COMMANDS_TOPIC, COMMAND)
+    if parameters.twist_output:
+        twist = node.create_publisher(TwistStamped, TWIST_OUTPUT_TOPIC, COMMAND)
+
+    def send(command: Command | None) -> None:
+        qdot = command.qdot if command is not None else np.zeros(len(JOINT_NAMES))
+        blended = command.blended if command is not None else np.zeros(4)
+        if joints is not None:
+            joints.publish(Float64MultiArray(data=qdot.tolist()))
+        if twist is not None:
+            message = TwistStamped()
+            message.header.stamp = node.get_clock().now().to_msg()
+            message.header.frame_id = parameters.twist_output_frame
+            vx, vy, vz, vrot = (float(v) for v in blended)
+            message.twist.linear.x, message.twist.linear.y, message.twist.linear.z = vx, vy, vz
+            message.twist.angular.z = vrot  # the wrist turn: about the tool's axis
+            twist.publish(message)
+
+    return send

@@ -1,10 +1,10 @@
 """How well a control loop held its rate, and how long a user command took to act.
 
 :class:`LoopStats` is fed by the node (``casa ros2 assist``): each tick's start and
-end, and the arrival of each user command. It reports the rate held, the tick period's
-spread, the tick's compute time and the latency from a command's arrival to the first
-blended command that used it (which includes the wait for the next tick: up to one
-period).
+end, the arrival of each user command, and each command published between ticks in
+answer to one. It reports the rate held, the tick period's spread, the tick's compute
+time and the latency from a command's arrival to the first blended command that used it
+(answered on arrival, or at the next tick when it could not be: then up to a period).
 
 Examples
 --------
@@ -15,6 +15,10 @@ Examples
 >>> summary = stats.summary()
 >>> summary["ticks"], round(summary["rate_hz"], 1), round(summary["latency_p99_ms"], 1)
 (3, 20.0, 42.0)
+>>> stats.arrived(0.11)
+>>> stats.published(0.112, used=0.11)
+>>> round(stats.summary()["latency_p50_ms"], 1), stats.summary()["answered_on_arrival"]
+(22.0, 1)
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ class LoopStats:
         self.compute: list[float] = []
         self.latency: list[float] = []
         self._pending: float | None = None
+        self.answered_on_arrival = 0
 
     def arrived(self, when: float) -> None:
         """A user command arrived at monotonic time ``when``."""
@@ -40,13 +45,24 @@ class LoopStats:
         """A tick ran from ``start`` to ``end`` (published then), on the command of ``used``."""
         self.starts.append(start)
         self.compute.append(end - start)
+        self._answered(end, used)
+
+    def published(self, end: float, *, used: float) -> None:
+        """Between ticks, a command computed from the user command of ``used`` went out."""
+        if self._answered(end, used):
+            self.answered_on_arrival += 1
+
+    def _answered(self, end: float, used: float | None) -> bool:
         if self._pending is not None and used is not None and used >= self._pending:
             self.latency.append(end - self._pending)
             self._pending = None
+            return True
+        return False
 
     def summary(self) -> dict:
-        """Ticks, rate (Hz), period p50/p99, compute p50/p99 and latency p50/p99 (ms)."""
-        out: dict = {"ticks": len(self.starts)}
+        """Ticks, rate (Hz), period p50/p99, compute p50/p99, latency p50/p99 (ms), and how
+        many commands were answered on arrival."""
+        out: dict = {"ticks": len(self.starts), "answered_on_arrival": self.answered_on_arrival}
         periods = np.diff(self.starts)
         if len(periods):
             out["rate_hz"] = float(1.0 / periods.mean())
@@ -77,6 +93,7 @@ class LoopStats:
         if "latency_p50_ms" in s:
             parts.append(
                 f"command-to-output latency p50 {s['latency_p50_ms']:.1f} ms, "
-                f"p99 {s['latency_p99_ms']:.1f} ms"
+                f"p99 {s['latency_p99_ms']:.1f} ms ({len(self.latency)} commands, "
+                f"{s['answered_on_arrival']} answered on arrival)"
             )
         return "; ".join(parts)

@@ -6,9 +6,6 @@ zero command, a log line, and the node goes on (and writes its trial at the end)
 
 from __future__ import annotations
 
-import json
-import time
-
 import numpy as np
 import pytest
 
@@ -17,54 +14,8 @@ from casa_core.robot import kinematics as kin
 from casa_core.ros2.messages import JOINT_NAMES
 from tests.ros2.ros_processes import casa, ros_env, stop
 
-rclpy = pytest.importorskip("rclpy", reason="the ros2 extra is not installed")
-
-
-class Harness:
-    """This test's node: publishes joint states and user commands, hears the assistant."""
-
-    def __init__(self, env: dict):
-        from geometry_msgs.msg import Twist
-        from sensor_msgs.msg import JointState
-        from std_msgs.msg import Float64MultiArray, String
-
-        self.Twist, self.JointState = Twist, JointState
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=int(env["ROS_DOMAIN_ID"]))
-        self.node = rclpy.create_node("fault_harness", context=self.context)
-        self.joints = self.node.create_publisher(JointState, "joint_states", 1)
-        self.user = self.node.create_publisher(Twist, "cmd_vel", 1)
-        self.states: list[dict] = []
-        self.commands: list[list[float]] = []
-        self.node.create_subscription(
-            String, "casa/state", lambda m: self.states.append(json.loads(m.data)), 10
-        )
-        self.node.create_subscription(
-            Float64MultiArray,
-            "velocity_controller/commands",
-            lambda m: self.commands.append(list(m.data)),
-            10,
-        )
-        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-
-    def run(self, seconds: float, *, names=JOINT_NAMES, positions=None, twist=(0.05, 0, 0, 0)):
-        """Publish for ``seconds`` at 20 Hz (None: that topic stays silent)."""
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            if positions is not None:
-                message = self.JointState(name=list(names), position=list(positions))
-                self.joints.publish(message)
-            if twist is not None:
-                message = self.Twist()
-                message.linear.x, message.linear.y, message.linear.z = twist[:3]
-                message.angular.z = float(twist[3])
-                self.user.publish(message)
-            self.executor.spin_once(timeout_sec=0.05)
-
-    def close(self):
-        self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
+pytest.importorskip("rclpy", reason="the ros2 extra is not installed")
+from tests.ros2.harness import Harness  # noqa: E402  (needs rclpy)
 
 
 def test_faults_stop_the_robot_and_are_logged(tmp_path, scene, monkeypatch):
@@ -86,13 +37,7 @@ def test_faults_stop_the_robot_and_are_logged(tmp_path, scene, monkeypatch):
             harness.run(seconds, **kwargs)
             phases[name] = harness.states[start:]
 
-        # The node's start and DDS discovery: until it says it assists (at most 30 s).
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and not (
-            harness.states and harness.states[-1]["fault"] is None
-        ):
-            harness.run(0.5, positions=q)
-        assert harness.states and harness.states[-1]["fault"] is None, harness.states[-3:]
+        harness.wait_until_assisting(q)
         phase("healthy", 2.0, positions=q)
         phase("user silent", 1.5, positions=q, twist=None)
         phase("joint states stop", 1.0, positions=None)
