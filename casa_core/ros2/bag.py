@@ -8,9 +8,10 @@ the tick it describes):
 
 - the joint state (``sensor_msgs/msg/JointState``): ``q1..q7`` and, through the arm's
   kinematics, ``x, y, z, rot``;
-- the user command (``geometry_msgs/msg/Twist``): the ``keys`` it amounts to
-  (:func:`~casa_core.ros2.messages.action_keys`), none once it is older than
-  :data:`~casa_core.ros2.messages.MAX_COMMAND_AGE`;
+- the user command (``geometry_msgs/msg/Twist`` or ``TwistStamped``): the ``keys`` it
+  amounts to (:func:`~casa_core.ros2.messages.action_keys`), none once it is older than
+  :data:`~casa_core.ros2.messages.MAX_COMMAND_AGE`; in a bag without it (a session driven
+  by a joystick), the keys come from the user's action each ``casa/state`` carries;
 - the assistant's state (``casa/state``, a JSON ``std_msgs/msg/String``): ``alpha``,
   ``beta:NAME`` and ``belief:NAME``; before its first message, and in a bag without it,
   the user has full control and nothing is inferred.
@@ -44,12 +45,12 @@ from casa_core.ros2.messages import (
     user_action,
 )
 
-#: The message type each topic must carry.
+#: The message types each topic may carry.
 TOPIC_TYPES = {
-    "joint_states": "sensor_msgs/msg/JointState",
-    "user_command": "geometry_msgs/msg/Twist",
-    "state": "std_msgs/msg/String",
-    "trial": "std_msgs/msg/String",
+    "joint_states": ("sensor_msgs/msg/JointState",),
+    "user_command": ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"),
+    "state": ("std_msgs/msg/String",),
+    "trial": ("std_msgs/msg/String",),
 }
 
 
@@ -124,10 +125,10 @@ def _messages(bag: Path, names: dict) -> dict:
         with Reader(bag) as reader:
             for connection in reader.connections:
                 role = role_of.get(connection.topic.lstrip("/"))
-                if role is not None and connection.msgtype != TOPIC_TYPES[role]:
+                if role is not None and connection.msgtype not in TOPIC_TYPES[role]:
                     raise BagError(
                         f"{bag}: topic {connection.topic!r} carries {connection.msgtype}, "
-                        f"expected {TOPIC_TYPES[role]}"
+                        f"expected {' or '.join(TOPIC_TYPES[role])}"
                     )
             wanted = [c for c in reader.connections if c.topic.lstrip("/") in role_of]
             for connection, stamp, raw in reader.messages(connections=wanted):
@@ -154,8 +155,9 @@ def _value(role: str, message):
     if role == "joint_states":
         return joint_positions(list(message.name), list(message.position))
     if role == "user_command":
-        linear = (message.linear.x, message.linear.y, message.linear.z)
-        return user_action(linear, message.angular.z)
+        twist = getattr(message, "twist", message)  # TwistStamped or Twist
+        linear = (twist.linear.x, twist.linear.y, twist.linear.z)
+        return user_action(linear, twist.angular.z)
     try:
         value = json.loads(message.data)
     except json.JSONDecodeError as error:
@@ -191,15 +193,18 @@ def _ticks(joints: list, commands: list, states: list) -> pd.DataFrame:
             angle += 2 * math.pi * round((rot - angle) / (2 * math.pi))
         rot = angle
         x, y, z = pose[:3, 3].tolist()
-        command = _latest(commands, stamps[1], when)
-        fresh = command is not None and when - command[0] <= max_age
+        # The node publishes a tick's state just after the tick: what came within it.
+        state = _latest(states, stamps[2], when + tick_ns - 1)
+        state = state[1] if state is not None else {}
         row = {"t": round(tick * TICK, 6), "x": x, "y": y, "z": z, "rot": rot}
-        row["keys"] = action_keys(command[1]) if fresh else ""
+        if commands:
+            command = _latest(commands, stamps[1], when)
+            fresh = command is not None and when - command[0] <= max_age
+            row["keys"] = action_keys(command[1]) if fresh else ""
+        else:
+            row["keys"] = _state_keys(state)
         row.update({f"q{i + 1}": float(v) for i, v in enumerate(q)})
         if intents:
-            # The node publishes a tick's state just after the tick: what came within it.
-            state = _latest(states, stamps[2], when + tick_ns - 1)
-            state = state[1] if state is not None else {}
             row["alpha"] = float(state.get("alpha", 1.0))
             for name in intents:
                 row[f"beta:{name}"] = float(state.get("beta", {}).get(name, 0.0))
@@ -208,6 +213,14 @@ def _ticks(joints: list, commands: list, states: list) -> pd.DataFrame:
                 row[f"belief:{name}"] = float(belief.get(name, 1.0 / len(intents)))
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _state_keys(state: dict) -> str:
+    """The keys of the user's action a ``casa/state`` carries ("" if none)."""
+    user = state.get("user") or []
+    if len(user) != 4 or not all(isinstance(v, int | float) and math.isfinite(v) for v in user):
+        return ""
+    return action_keys(user)
 
 
 def import_bag(bag: Path | str, out: Path | str, *, force: bool = False, **options) -> Path:

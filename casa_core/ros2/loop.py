@@ -196,7 +196,7 @@ class AssistLoop:
         row = self._row(t, state, q, user, alpha)
         self.rows.append(row)
         self.tick_index += 1
-        text = state_json(t, alpha, self.assistant.latest, state, fault)
+        text = state_json(t, alpha, self.assistant.latest, state, fault, user)
         return Tick(command, text, row, fault)
 
     def respond(

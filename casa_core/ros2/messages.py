@@ -213,12 +213,15 @@ def state_json(
     inference,
     state: Iterable[float],
     fault: str | None,
+    user: Iterable[float] = (),
 ) -> str:
     """The text of a ``casa/state`` message (a JSON object, ``docs/ros2.md``).
 
     Keys: ``t`` (s since the trial started), ``alpha`` (the authority applied), ``beta``
     and ``belief`` (per intent name), ``intent`` (theta*), ``misspecified``, ``state``
-    (``[x, y, z, rot]``) and ``fault`` (a key of :data:`FAULTS`, or null).
+    (``[x, y, z, rot]``), ``user`` (the user's action T(a) taken at the tick, whatever
+    the input device; empty before the arm is known) and ``fault`` (a key of
+    :data:`FAULTS`, or null).
     """
     message = {
         "t": round(float(t), 6),
@@ -228,6 +231,7 @@ def state_json(
         "intent": inference.intent if inference is not None else None,
         "misspecified": bool(inference.misspecified) if inference is not None else False,
         "state": [float(v) for v in state],
+        "user": [float(v) for v in user],
         "fault": fault,
     }
     return json.dumps(message, sort_keys=True)

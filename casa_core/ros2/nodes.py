@@ -1,11 +1,15 @@
 """The ROS 2 nodes: the simulated arm and the assistant behind the topics (needs rclpy).
 
 Both run a control loop of their own at :data:`~casa_core.ros2.messages.CONTROL_RATE`
-(20 Hz): they spin the node until the next tick's deadline, so that callbacks only
-store the newest message (and when it arrived, on this machine's monotonic clock, so
-that a remote publisher's clock never makes a message look fresh) and the tick does
-the work. The conversions and checks are :mod:`casa_core.ros2.messages`; the assistant's
-tick is :class:`casa_core.ros2.loop.AssistLoop`.
+(20 Hz): they spin the node until the next tick's deadline; callbacks store the newest
+message (and when it arrived, on this machine's monotonic clock, so that a remote
+publisher's clock never makes a message look fresh) and the tick does the work. The
+assistant's user-command callback also answers the command at once
+(:meth:`~casa_core.ros2.loop.AssistLoop.respond`), so that it acts without waiting for
+the tick. Inputs, outputs and the stated ages are ROS parameters
+(:mod:`casa_core.ros2.parameters`). The conversions and checks are
+:mod:`casa_core.ros2.messages`; the assistant's tick is
+:class:`casa_core.ros2.loop.AssistLoop`.
 
 QoS (``docs/ros2.md``): subscriptions are best effort, keep last 1, so that they match
 reliable and best-effort publishers alike and only the newest message waits; commands

@@ -85,4 +85,5 @@ def test_the_state_message_without_inference():
         "misspecified": False,
         "state": [0.0, 0.0, 0.0, 0.0],
         "t": 0.0,
+        "user": [],
     }

@@ -55,19 +55,30 @@ def twist(action):
     )
 
 
+def twist_stamped(ns: int, action):
+    return T["geometry_msgs/msg/TwistStamped"](header=header(ns), twist=twist(action))
+
+
 def text(value) -> object:
     return T["std_msgs/msg/String"](data=json.dumps(value))
 
 
-def write_bag(path, trial, *, storage="sqlite3", meta=True, joint_type=None, spoil=None):
-    """The trial as a rosbag2: joint states and commands per tick, the state at each."""
+def write_bag(
+    path, trial, *, storage="sqlite3", meta=True, joint_type=None, spoil=None, user_as="twist"
+):
+    """The trial as a rosbag2: joint states and commands per tick, the state at each.
+
+    ``user_as``: the user's command as a ``twist`` or ``twist_stamped`` on cmd_vel, or
+    only in each state (``state``: a joystick session recorded without cmd_vel)."""
     frame = trial.frame
     q_columns = [f"q{i}" for i in range(1, 8)]
     with Writer(path, version=9, storage_plugin=STORAGE[storage]) as writer:
         joints = writer.add_connection(
             "/joint_states", joint_type or "sensor_msgs/msg/JointState", typestore=STORE
         )
-        user = writer.add_connection("/cmd_vel", "geometry_msgs/msg/Twist", typestore=STORE)
+        kind = {"twist": "Twist", "twist_stamped": "TwistStamped"}.get(user_as)
+        if kind:
+            user = writer.add_connection("/cmd_vel", f"geometry_msgs/msg/{kind}", typestore=STORE)
         state = writer.add_connection("/casa/state", "std_msgs/msg/String", typestore=STORE)
         if meta:
             info = writer.add_connection("/casa/trial", "std_msgs/msg/String", typestore=STORE)
@@ -82,8 +93,10 @@ def write_bag(path, trial, *, storage="sqlite3", meta=True, joint_type=None, spo
             if joint_type is None:
                 writer.write(joints, ns - 5_000_000, STORE.serialize_cdr(message, joints.msgtype))
             action = keys_to_action(parse_keys(row["keys"]))
-            writer.write(user, ns - 6_000_000, STORE.serialize_cdr(twist(action), user.msgtype))
-            value = {"alpha": row["alpha"]}
+            if kind:
+                command = twist(action) if kind == "Twist" else twist_stamped(ns, action)
+                writer.write(user, ns - 6_000_000, STORE.serialize_cdr(command, user.msgtype))
+            value = {"alpha": row["alpha"], "user": action.tolist()}
             value["beta"] = {n: row[f"beta:{n}"] for n in names}
             value["belief"] = {n: row[f"belief:{n}"] for n in names}
             writer.write(state, ns + 1_000_000, STORE.serialize_cdr(text(value), state.msgtype))
@@ -110,6 +123,16 @@ def test_a_bag_imports_into_a_dataset_that_builds(tmp_path, trial, storage, caps
     assert main(["process", str(raw), "--out", str(tmp_path / "processed")]) == 0
     trials = pd.read_csv(tmp_path / "processed" / "trials.csv")
     assert bool(trials["success"].iloc[0])
+
+
+@pytest.mark.parametrize("user_as", ["twist_stamped", "state"])
+def test_the_users_keys_from_a_twist_stamped_or_the_assistants_state(tmp_path, trial, user_as):
+    bag = write_bag(tmp_path / "bag", trial, user_as=user_as)
+    raw = tmp_path / "raw"
+    assert main(["import", "rosbag", str(bag), "--out", str(raw)]) == 0
+    _, frame = read_trial(raw / "P02" / "known_goal_no_misspecification_CASA")
+    assert frame["keys"].tolist() == trial.frame["keys"].tolist()
+    assert set(frame["keys"]) != {""}
 
 
 def test_options_give_and_override_the_metadata(tmp_path, trial):
