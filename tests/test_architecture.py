@@ -27,7 +27,7 @@ MAX_LINES = 420
 ROOMS = {
     "numerics": ("casa_core.numerics",),
     "words": ("casa_core", "casa_core.vocabulary", "casa_core.defaults"),
-    "algebra": ("casa_core.fixed_order",),
+    "algebra": ("casa_core.fixed_order", "casa_core.portable_math"),
     "ground": ("casa_core.scene", "casa_core.config"),
     "model": ("casa_core.model",),
     "assist": ("casa_core.assist",),

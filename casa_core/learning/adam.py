@@ -1,8 +1,10 @@
 """Adam for the IRL network, written out.
 
 The same update as ``torch.optim.Adam`` on the CPU (its single-tensor form, with
-L2 weight decay added to the gradient), to the bit: ``tests/learning/test_irl.py`` checks
-the weights after several steps against torch's. Written out because constructing
+L2 weight decay added to the gradient), to the bit, with one exception: the square
+root of the second moment comes from :mod:`casa_core.portable_math`, because torch's
+own depends on the processor. ``tests/learning/test_speed_equivalence.py`` checks the
+weights after 60 steps against torch's given the same square root. Written out because constructing
 ``torch.optim.Adam`` imports ``torch._dynamo``, which costs about 1.7 CPU-seconds
 once per process, as much as learning an intent itself.
 """
@@ -10,6 +12,8 @@ once per process, as much as learning an intent itself.
 from __future__ import annotations
 
 import torch
+
+from casa_core import portable_math
 
 
 class Adam:
@@ -65,5 +69,5 @@ class Adam:
                     grad = grad.add(param, alpha=self.weight_decay)
                 mean.lerp_(grad, 1 - beta1)
                 square.mul_(beta2).addcmul_(grad, grad, value=1 - beta2)
-                denominator = (square.sqrt() / correction2_sqrt).add_(self.eps)
+                denominator = (portable_math.sqrt(square) / correction2_sqrt).add_(self.eps)
                 param.addcdiv_(mean, denominator, value=-step_size)

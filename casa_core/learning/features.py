@@ -39,6 +39,7 @@ from collections.abc import Mapping
 import numpy as np
 import torch
 
+from casa_core import portable_math
 from casa_core.learning.network import network_output
 from casa_core.planning.rotation import end_effector_rotation
 
@@ -72,7 +73,7 @@ def state_features(states: torch.Tensor, objects: torch.Tensor, *, length_scale:
     rotation = end_effector_rotation(states[..., 3]).flatten(start_dim=-2)
     offsets = objects - position[..., None, :]
     # Rounded at 1 mm so that the gradient exists on the object itself.
-    distances = torch.sqrt((offsets * offsets).sum(dim=-1) + 1e-6)
+    distances = portable_math.sqrt((offsets * offsets).sum(dim=-1) + 1e-6)
     inputs = [position, offsets.flatten(start_dim=-2), distances]
     # float32 halves the network's time; the planner keeps states in float64.
     return torch.cat([rotation] + [x / length_scale for x in inputs], dim=-1).float()

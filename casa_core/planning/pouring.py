@@ -21,6 +21,7 @@ import numpy as np
 import torch
 from numba import njit
 
+from casa_core import portable_math
 from casa_core.model._checks import require_positive
 from casa_core.planning import PlannedIntent, PlannerConfig
 from casa_core.planning.rotation import R0, end_effector_rotation
@@ -39,7 +40,7 @@ def cup_tilt_deg(rot) -> np.ndarray | float:
     """Angle (degrees) between the cup's axis and world up, at angle(s) ``rot``."""
     rot_t = torch.as_tensor(np.asarray(rot, dtype=float))
     cosine = end_effector_rotation(rot_t)[..., 2, 0].clamp(-1.0, 1.0)
-    tilt = np.degrees(torch.arccos(cosine).numpy())
+    tilt = np.degrees(np.arccos(cosine.numpy()))
     return float(tilt) if tilt.ndim == 0 else tilt
 
 
@@ -149,7 +150,7 @@ class PouringIntent(PlannedIntent):
         axis = cup_axis(states[..., 3])
         pour = _norm(axis - self._pour_axis, ROUNDING)
         spill = _norm(axis - self._up, ROUNDING)
-        far = 1.0 - torch.exp(-((d / self.radius) ** 2))
+        far = 1.0 - portable_math.exp(-((d / self.radius) ** 2))
         return (
             self.scale * self.dt * (d + self.pour_weight * pour + self.spill_weight * far * spill)
         )
@@ -157,7 +158,7 @@ class PouringIntent(PlannedIntent):
 
 def _norm(v: torch.Tensor, width: float) -> torch.Tensor:
     """Euclidean norm over the last axis, rounded over ``width`` so its gradient exists at 0."""
-    return torch.sqrt((v * v).sum(dim=-1) + width * width) - width
+    return portable_math.sqrt((v * v).sum(dim=-1) + width * width) - width
 
 
 class PouringCost:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import torch
 
+from casa_core import portable_math
 from casa_core.robot.kinematics import EE_ROTATION_AT_ZERO
 
 #: R(0): columns are the tool's x (cup axis, up), y and z axes in the base frame.
@@ -45,4 +46,4 @@ def end_effector_rotation(rot: torch.Tensor) -> torch.Tensor:
     a = torch.stack([r0[:, 0], r0[:, 1], zero], dim=-1)
     b = torch.stack([r0[:, 1], -r0[:, 0], zero], dim=-1)
     c = torch.stack([zero, zero, r0[:, 2]], dim=-1)
-    return torch.cos(rot)[..., None, None] * a + torch.sin(rot)[..., None, None] * b + c
+    return portable_math.cos(rot)[..., None, None] * a + portable_math.sin(rot)[..., None, None] * b + c
