@@ -14,6 +14,10 @@ kernels that crash or compute wrongly on their processors, and the kernel it sel
 changes the last bit of every BLAS call. Result-bearing arithmetic therefore stays off
 the BLAS (elementwise products summed in a fixed order, ``math.hypot``, compiled loops):
 see docs/reproducibility.md.
+
+MKL's vector maths (VML), where torch sends sin, cos, exp, sqrt and other elementwise
+functions of a CPU tensor, picks its code path by processor vendor whatever ``MKL_CBWR``
+says; :mod:`casa_core.portable_math` computes the ones casa uses with numpy instead.
 """
 
 from __future__ import annotations
