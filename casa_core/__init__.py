@@ -16,9 +16,10 @@ turn logs into tables (``tasks``: what each task intends), which ``stats/`` and
 ``scene``, the workflow config's loader in ``config``; ``bench`` times the package
 and ``cli/`` is the ``casa`` command; ``numerics`` caps the libraries' CPU code paths
 so results are the same on every x86-64 machine, and ``portable_math`` computes torch's
-sin, cos, exp and sqrt past the one library that ignores those caps. Imports run one way: equations <- intents,
-assistant <- planning <- learning <- study. The paper's symbols are mapped to
-functions in docs/paper-to-code.md, our departures from it in docs/departures.md.
+sin, cos, exp and sqrt past the one library that ignores those caps. Imports run one
+way: equations <- intents, assistant <- planning <- learning <- study. The paper's
+symbols are mapped to functions in docs/paper-to-code.md, our departures from it in
+docs/departures.md.
 """
 
 # Before numpy, torch or numba load: their code paths are chosen then (numerics.py).

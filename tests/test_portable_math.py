@@ -32,11 +32,7 @@ def vml_functions() -> set[str]:
     """The ATen functions torch computes with MKL's VML (uncommented IMPLEMENT_VML_MKL lines)."""
     assert HEADER.is_file(), f"torch's header {HEADER} is missing: cannot tell what uses VML"
     lines = HEADER.read_text(encoding="utf-8").splitlines()
-    found = {
-        m.group(1)
-        for line in lines
-        if (m := re.match(r"\s*IMPLEMENT_VML_MKL\((\w+),", line))
-    }
+    found = {m.group(1) for line in lines if (m := re.match(r"\s*IMPLEMENT_VML_MKL\((\w+),", line))}
     assert {"cos", "sin", "exp", "sqrt"} <= found  # the functions portable_math replaces
     return found
 

@@ -46,4 +46,8 @@ def end_effector_rotation(rot: torch.Tensor) -> torch.Tensor:
     a = torch.stack([r0[:, 0], r0[:, 1], zero], dim=-1)
     b = torch.stack([r0[:, 1], -r0[:, 0], zero], dim=-1)
     c = torch.stack([zero, zero, r0[:, 2]], dim=-1)
-    return portable_math.cos(rot)[..., None, None] * a + portable_math.sin(rot)[..., None, None] * b + c
+    return (
+        portable_math.cos(rot)[..., None, None] * a
+        + portable_math.sin(rot)[..., None, None] * b
+        + c
+    )

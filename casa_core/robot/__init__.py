@@ -8,6 +8,8 @@ The robot knows nothing of learning or the study. The modules, each with one job
   controller; :mod:`~casa_core.robot.control_kernel`: that controller's tick, compiled;
 - :mod:`~casa_core.robot.scene`: the scene's bodies (goals, cup, bowl) in pybullet;
 - :mod:`~casa_core.robot.keys`: the keyboard map, held keys to a Cartesian velocity;
+- :mod:`~casa_core.robot.original_teleop`: the original implementation's teleoperation,
+  held keys to joint velocities through inverse kinematics of link 7's position;
 - :mod:`~casa_core.robot.teleop`: the teleoperation window and its keyboard;
 - :mod:`~casa_core.robot.screens`: the window of ``casa session``, screen by screen;
 - :mod:`~casa_core.robot.render`: the scene rendered for ``figures/scene.png``.

@@ -91,6 +91,10 @@ class ArmSimulation:
     gui_options : str
         pybullet's window options (``p.connect``'s ``options``), e.g.
         ``"--width=1024 --height=768"``.
+    start_q : array_like, optional
+        Joint angles (rad) to start at, instead of the inverse kinematics of the scene's
+        start state: a start given as the original's joint angles, whose tool
+        orientation is not the held one.
 
     Notes
     -----
@@ -107,6 +111,7 @@ class ArmSimulation:
         gui: bool = False,
         settings: ControllerSettings | None = None,
         gui_options: str = "",
+        start_q=None,
     ):
         if settings is None:
             settings = ControllerSettings(dt=scene.teleop.dt)
@@ -138,7 +143,7 @@ class ArmSimulation:
         self._q = np.zeros(kin.N_JOINTS)
         self._state = np.zeros(4)
         self._reference = np.zeros(4)
-        self.reset(scene.start_state)
+        self.reset(scene.start_state, q=start_q)
 
     # -- lifecycle ---------------------------------------------------------------------
     def close(self) -> None:
@@ -171,6 +176,13 @@ class ArmSimulation:
         )
         rotation = np.array(p.getMatrixFromQuaternion(link[5])).reshape(3, 3)
         return np.array(link[4]), rotation
+
+    def link7(self) -> np.ndarray:
+        """Position ``(3,)`` of the link-7 origin, the original's end effector, read now."""
+        link = p.getLinkState(
+            self.robot, TOOL_LINK - 1, computeForwardKinematics=True, physicsClientId=self.client
+        )
+        return np.array(link[4])
 
     def _read(self) -> None:
         joints = p.getJointStates(self.robot, ARM_JOINTS, physicsClientId=self.client)
