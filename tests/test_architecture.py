@@ -41,6 +41,7 @@ ROOMS = {
     "figures": ("casa_core.figures",),
     "report": ("casa_core.report",),
     "study": ("casa_core.study",),
+    "calibration": ("casa_core.calibration",),
     "experiments": ("casa_core.experiments",),
     "bench": ("casa_core.bench",),
     "ros2": ("casa_core.ros2",),
@@ -66,6 +67,7 @@ MAY_IMPORT = {
     "report": {"words", "io"},
     "study": {"algebra", "words", "ground", "model", "assist", "robot", "io", "planning"}
     | {"learning", "analysis"},
+    "calibration": {"words", "ground", "assist", "robot", "io", "analysis", "study"},
     "experiments": {"words", "ground", "assist"},
     "bench": {"algebra", "words", "ground", "assist", "robot", "study", "planning", "learning"},
     "ros2": {"algebra", "words", "ground", "model", "assist", "robot", "io", "study"},

@@ -20,6 +20,7 @@ its handlers: each loads its inputs once, calls the package and reports.
 - :mod:`~casa_core.cli.report`: ``casa report`` (its claims and robustness pages included)
 - :mod:`~casa_core.cli.power`: ``casa power``
 - :mod:`~casa_core.cli.progress`: ``casa progress``
+- :mod:`~casa_core.cli.calibrate`: ``casa calibrate``
 - :mod:`~casa_core.cli.ros2`: ``casa ros2`` (the ``ros2`` extra's nodes)
 
 An input that cannot be used (:class:`~casa_core.config.ConfigError`,
@@ -37,6 +38,7 @@ import sys
 from casa_core import __version__
 from casa_core.cli import (
     bench,
+    calibrate,
     case_study,
     figure,
     import_,
@@ -103,6 +105,7 @@ def build_parser() -> argparse.ArgumentParser:
         report,
         power,
         progress,
+        calibrate,
         ros2,
     ):
         module.register(commands)

@@ -114,6 +114,10 @@ def register(commands) -> None:
     results.add_argument(
         "--operator", help="the simulated operator model, named for a simulated dataset"
     )
+    results.add_argument(
+        "--population",
+        help="whom the simulated participants were drawn from, named for a simulated dataset",
+    )
     results.add_argument("--out", required=True, metavar="MD", help="results.md to write")
     results.add_argument("--out-html", metavar="HTML", help="its HTML page (optional)")
     provenance_options(results)
@@ -203,6 +207,7 @@ def _results(args) -> int:
             tables,
             dataset=args.dataset,
             operator=args.operator,
+            population=args.population,
             provenance=built.line() if built else "",
         )
     except (OSError, ValueError) as error:

@@ -17,6 +17,8 @@ a :class:`matplotlib.figure.Figure`; :func:`save_figure` writes it as vector PDF
 - :mod:`~casa_core.figures.replay`: a replayed trial: belief, confidence and alpha over time
 - :mod:`~casa_core.figures.robustness`: the claims under each modelling variant
 - :mod:`~casa_core.figures.power`: power against the number of participants
+- :mod:`~casa_core.figures.calibration`: `casa calibrate`'s posterior predictive check and
+  the parameter recovery
 - :mod:`~casa_core.figures.build`: the tables read, a figure drawn and written (``casa figure``)
 """
 

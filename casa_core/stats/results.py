@@ -132,7 +132,9 @@ ROBUSTNESS_NOTE = (
 )
 
 
-def modelling_note(trials: pd.DataFrame, *, operator: str | None = None) -> str:
+def modelling_note(
+    trials: pd.DataFrame, *, operator: str | None = None, population: str | None = None
+) -> str:
     """For a simulated dataset: its modelling choices and where the other choices are judged.
 
     Examples
@@ -152,6 +154,8 @@ def modelling_note(trials: pd.DataFrame, *, operator: str | None = None) -> str:
     ]
     if operator:
         choices.append(f"operator model {operator}")
+    if population:
+        choices.append(f"operator population {population}")
     return f"Modelling choices (the config's defaults): {', '.join(choices)}. {ROBUSTNESS_NOTE}"
 
 
@@ -161,6 +165,7 @@ def results_markdown(
     *,
     dataset: str,
     operator: str | None = None,
+    population: str | None = None,
     provenance: str = "",
 ) -> str:
     """The Markdown of ``results.md`` from :func:`casa_core.stats.claims.evaluate_claims`.
@@ -177,6 +182,9 @@ def results_markdown(
     operator : str, optional
         The simulated operator model (``simulation.operator``), named for a simulated
         dataset beside a pointer to the robustness table (:func:`modelling_note`).
+    population : str, optional
+        Whom the simulated participants were drawn from
+        (:func:`casa_core.io.population.population_label`), named beside the operator.
     provenance : str, optional
         The configuration that built it (:meth:`casa_core.config.Provenance.line`),
         written under the title.
@@ -209,7 +217,7 @@ def results_markdown(
     lines = [f"# Claims of the paper on dataset {dataset}", ""]
     lines += [f"{provenance}.", ""] if provenance else []
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
-    note = modelling_note(tables["trials"], operator=operator)
+    note = modelling_note(tables["trials"], operator=operator, population=population)
     lines += [note, ""] if note else []
     lines += [
         "Each claim of the paper (C1-C4: what it observed in its expert case study, Sec. "

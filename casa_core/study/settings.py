@@ -142,7 +142,7 @@ class StudySettings:
             epsilon=float(simulation["epsilon"]),
             operator=simulation["operator"],
             inference=inference_preset(config),
-            population=Population.from_config(simulation["population"]),
+            population=configured_population(simulation),
         )
 
     @classmethod
@@ -162,6 +162,20 @@ class StudySettings:
             operator=case_study["operator"],
             inference=inference_preset(config),
         )
+
+
+def configured_population(simulation: Mapping) -> Population:
+    """The population of a validated config's ``simulation`` block.
+
+    The fitted population of ``operator_population`` (a `casa calibrate` file,
+    :func:`casa_core.io.population.read_population`) when set, else ``population``.
+    """
+    path = simulation.get("operator_population")
+    if path is None:
+        return Population.from_config(simulation["population"])
+    from casa_core.io.population import read_population
+
+    return Population.from_config(read_population(path)["population"])
 
 
 def inference_preset(config: Mapping) -> Preset:

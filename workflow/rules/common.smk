@@ -11,6 +11,7 @@ from casa_core import config as casa_config
 from casa_core.experiments import power as casa_power
 from casa_core.experiments import robustness as casa_variants
 from casa_core import vocabulary
+from casa_core.io.population import population_label
 from casa_core.io.atomic import atomic_write_text
 from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.scene import DEFAULT_SCENE
@@ -34,6 +35,10 @@ config.clear()
 config.update(casa_config.load_config(*config_layers(), overrides=workflow.config_settings.config))
 # A config without a scene (the schema's default, null) means the package's own, as for casa.
 config["scene"] = config["scene"] or os.path.relpath(DEFAULT_SCENE)
+# A population fitted by `casa calibrate` (docs/calibration.md): read here, so that a bad
+# file stops the run before any job, naming its key; the simulating rules take it as input.
+OPERATOR_POPULATION = [p for p in [config["simulation"]["operator_population"]] if p]
+population_label(config["simulation"])
 
 
 def effective_config_file(path=Path("data/interim/config.yaml"), settings=None):
@@ -221,7 +226,10 @@ def operator_option(wildcards):
     """The operator model of a generated dataset, named in its results.md."""
     if wildcards.ds not in GENERATED:
         return ""
-    return f"--operator {config['simulation']['operator']}"
+    option = f"--operator {config['simulation']['operator']}"
+    if OPERATOR_POPULATION:
+        option += f" --population {shlex.quote(population_label(config['simulation']))}"
+    return option
 
 
 def stats_input(wildcards):

@@ -10,6 +10,7 @@ use rule robustness_participant as power_participant with:
     input:
         config=replicate_config_input,
         scene=config["scene"],
+        population=OPERATOR_POPULATION,
     output:
         before=temp(directory(REPLICATE / "raw" / "p{p}" / "before")),
         after=temp(directory(REPLICATE / "raw" / "p{p}" / "after")),

@@ -15,6 +15,7 @@ use rule simulated_participant as robustness_participant with:
     input:
         config=variant_config_input,
         scene=config["scene"],
+        population=OPERATOR_POPULATION,
     output:
         before=directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before"),
         after=directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "after"),

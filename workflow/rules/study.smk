@@ -20,6 +20,7 @@ rule simulated_participant:
     input:
         config=CONFIG_FILE,
         scene=config["scene"],
+        population=OPERATOR_POPULATION,
     output:
         before=directory(SIMULATED / "p{p}" / "before"),
         after=directory(SIMULATED / "p{p}" / "after"),

@@ -1,0 +1,161 @@
+"""`casa calibrate` on datasets: what it writes, and what it refuses.
+
+The recorded dataset is written as `casa teleop` records a person (``source`` human),
+with scripted keys standing in for the person; tests/study/test_session.py runs
+`casa calibrate` on a whole `casa session` recorded in a window. The imported dataset is
+the synthetic original-format session of tests/io/test_import_original.py, imported by
+`casa import original`. Sizes are the smallest that train (30 simulations).
+"""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import pytest
+
+from casa_core.cli import main
+from casa_core.config import load_config
+from casa_core.io.population import PopulationFileError, read_population
+from casa_core.study.settings import StudySettings
+from tests.io.test_import_original import write_session
+
+SMALL = ["--simulations", "30", "--predictive", "4", "--cores", "2", "--seed", "3"]
+
+
+@pytest.fixture(scope="module")
+def imported(tmp_path_factory):
+    root = tmp_path_factory.mktemp("original")
+    folder = root / "sessions" / "P03"
+    write_session(folder, "task1a_data.npz", build={"beta": False})
+    write_session(folder, "task1b_data.npz")
+    write_session(folder, "task1c_data.npz")
+    write_session(folder, "task2c_learned_data.npz", build={"n_goals": 3})
+    out = root / "raw" / "original"
+    assert main(["import", "original", str(folder), "--out", str(out)]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    from casa_core.scene import load_scene
+    from casa_core.study.closed_loop import run_trial
+    from casa_core.study.key_sources import ScriptedKeys
+
+    raw = tmp_path_factory.mktemp("recorded") / "mylab"
+    scene = load_scene()
+    plan = [("known_goal", method, None) for method in ("NA", "PBA", "CASA")]
+    plan.append(("unknown_goal", "CASA", "after_learning"))
+    for task, method, phase in plan:
+        keys = ScriptedKeys([(0.4, ["x+"]), (3.0, ["x+", "y+"]), (5.0, [])])
+        result = run_trial(
+            scene,
+            task,
+            method,
+            keys,
+            participant="P01",
+            phase=phase,
+            source_kind="human",
+            max_duration=6.0,
+        )
+        result.write(raw / "P01" / f"{task}_{result.meta['phase']}_{method}")
+    return raw
+
+
+@pytest.fixture(scope="module")
+def calibrated(recorded, tmp_path_factory):
+    out = tmp_path_factory.mktemp("fit") / "population.json"
+    assert main(["calibrate", str(recorded), "--out", str(out), *SMALL]) == 0
+    return out
+
+
+def test_a_recorded_dataset_gives_a_population_a_predictive_table_and_a_figure(calibrated):
+    document = read_population(calibrated)
+    assert document["format"] == "casa-operator-population" and document["version"] == 1
+    assert document["dataset"] == "mylab" and document["usable_simulations"] >= 10
+    samples = document["posterior"]["log_median_samples"]
+    assert len(samples) == 1000 and len(samples[0]) == 6
+    table = pd.read_csv(calibrated.with_name("population_predictive.csv"), keep_default_na=False)
+    # The three known-goal trials (NA, PBA, CASA) are fitted; the learned one is left out.
+    assert sorted(set(table["method"])) == ["CASA", "NA", "PBA"]
+    assert set(table["task"]) == {"known_goal"} and len(table) == 3 * 6
+    assert (table["simulated_low"] <= table["simulated_high"]).all()
+    assert calibrated.with_name("population_predictive.png").stat().st_size > 10_000
+
+
+def test_the_trial_after_learning_is_left_out_with_a_warning(recorded, tmp_path, capsys):
+    out = tmp_path / "p.json"
+    assert main(["calibrate", str(recorded), "--out", str(out), *SMALL]) == 0
+    assert "unknown_goal_after_learning_CASA.csv: left out" in capsys.readouterr().err
+
+
+def test_an_imported_dataset_on_the_authors_layout_is_refused_naming_the_scene(
+    imported, tmp_path, capsys
+):
+    # The held-orientation operators cannot reach the authors' goals (issue of the
+    # authors' setup, docs/departures.md): the refusal names the scene and the pose.
+    out = tmp_path / "p.json"
+    assert main(["calibrate", str(imported), "--out", str(out), *SMALL]) == 2
+    err = capsys.readouterr().err
+    assert f"in scene {imported / 'scene.yaml'}" in err and "not reachable" in err
+    assert not out.exists()
+
+
+def test_the_same_seed_gives_the_same_population(recorded, calibrated, tmp_path):
+    again = tmp_path / "again.json"
+    assert main(["calibrate", str(recorded), "--out", str(again), *SMALL]) == 0
+    assert again.read_bytes() == calibrated.read_bytes()
+
+
+def test_the_study_draws_its_participants_from_a_population_file(calibrated, tmp_path):
+    overlay = tmp_path / "overlay.yaml"
+    overlay.write_text(f"simulation:\n  operator_population: {calibrated}\n", encoding="utf-8")
+    settings = StudySettings.from_config(load_config("config/config.yaml", overlay))
+    fitted = read_population(calibrated)["population"]
+    assert settings.population.deadband.median == fitted["deadband"]["median"]
+    assert settings.population.deadband.sigma == 0.25  # the study's spread
+
+
+def test_a_population_file_that_breaks_the_format_is_refused_naming_the_key(calibrated, tmp_path):
+    document = json.loads(calibrated.read_text())
+    document["population"]["deadband"]["median"] = -1
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document))
+    with pytest.raises(PopulationFileError, match="key population/deadband/median"):
+        read_population(bad)
+    with pytest.raises(PopulationFileError, match="no such population file"):
+        read_population(tmp_path / "missing.json")
+
+
+def test_a_dataset_without_people_is_refused_and_nothing_is_written(tmp_path, capsys):
+    from casa_core.scene import load_scene
+    from casa_core.study.closed_loop import run_trial
+    from casa_core.study.key_sources import ScriptedKeys
+
+    raw = tmp_path / "raw" / "sim"
+    result = run_trial(
+        load_scene(),
+        "known_goal",
+        "NA",
+        ScriptedKeys([(0.5, ["x+"])]),
+        participant="p01",
+        max_duration=1.0,
+    )
+    result.write(raw / "p01" / "known_goal_no_misspecification_NA")
+    out = tmp_path / "out" / "p.json"
+    assert main(["calibrate", str(raw), "--out", str(out), *SMALL]) == 2
+    assert "no trial with source 'human'" in capsys.readouterr().err
+    assert not out.parent.exists() or not any(out.parent.iterdir())
+
+
+def test_a_dataset_of_one_trial_is_refused_naming_the_rule(recorded, tmp_path, capsys):
+    import shutil
+
+    one = tmp_path / "one"
+    (one / "P01").mkdir(parents=True)
+    for suffix in (".csv", ".json"):
+        name = f"known_goal_no_misspecification_NA{suffix}"
+        shutil.copy(recorded / "P01" / name, one / "P01" / name)
+    assert main(["calibrate", str(one), "--out", str(tmp_path / "p.json"), *SMALL]) == 2
+    assert "1 human trial(s) the simulator can run" in capsys.readouterr().err
+    assert not (tmp_path / "p.json").exists()
