@@ -17,7 +17,7 @@ import pandas as pd
 
 from casa_core.calibration import fit
 from casa_core.calibration.design import People
-from casa_core.calibration.simulator import Simulator, simulate_many, with_medians
+from casa_core.calibration.simulator import PARAMETERS, Simulator, simulate_many, with_medians
 from casa_core.calibration.summaries import cell_means, summary_labels
 from casa_core.study.settings import Population
 from casa_core.vocabulary import METHODS
@@ -168,7 +168,6 @@ def predictive_table(people: People, predicted: np.ndarray, mask: np.ndarray) ->
 
 def population_document(result: Calibration, *, operator: str, seed: int) -> dict:
     """The population file's document (:mod:`casa_core.io.population`) of a calibration."""
-    from casa_core.calibration.simulator import PARAMETERS
     from casa_core.io.population import FORMAT, VERSION
 
     population = result.population

@@ -132,8 +132,10 @@ def read_people(raw_dir: Path | str, scene: Scene, *, max_duration: float) -> Pe
             )
         )
         summary = trial_summaries(frame, intended[task], dt=dt)
-        rows.append({"participant": str(meta["participant"]), "task": task, **summary})
-        rows[-1]["method"] = meta["method"]
+        rows.append(
+            {"participant": str(meta["participant"]), "task": task, "method": meta["method"]}
+            | summary
+        )
     if len(kept) < MIN_TRIALS:
         raise CalibrationInputError(
             f"dataset {str(root)!r}: {len(kept)} human trial(s) the simulator can run "
