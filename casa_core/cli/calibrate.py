@@ -7,7 +7,13 @@ import sys
 from pathlib import Path
 
 from casa_core import vocabulary
-from casa_core.cli._options import dataset_scene, dataset_scene_option, example, positive_int
+from casa_core.cli._options import (
+    dataset_scene,
+    dataset_scene_option,
+    example,
+    nonnegative_int,
+    positive_int,
+)
 
 EXAMPLE = "casa calibrate data/raw/mylab --out populations/mylab.json"
 
@@ -57,7 +63,9 @@ def register(commands) -> None:
         default=list(vocabulary.METHODS),
         help="fit these methods' trials; the others are only predicted (default: all)",
     )
-    command.add_argument("--seed", type=int, default=0, help="seed of the fit (default 0)")
+    command.add_argument(
+        "--seed", type=nonnegative_int, default=0, help="seed of the fit (default 0)"
+    )
     command.add_argument(
         "--cores",
         type=positive_int,
