@@ -62,8 +62,12 @@ if POWER:
     for ext in ("pdf", "png"):
         check_file(FIGS / f"power.{ext}")
     table = read_table(PROCESSED / "power" / "power.csv")
-    if list(table.columns) != POWER_COLUMNS:
-        problems.append(f"power/power.csv: columns {list(table.columns)}, expected {POWER_COLUMNS}")
+    # casa power table adds whom the participants were drawn from (docs/power.md).
+    expected = [*POWER_COLUMNS, "population"]
+    if list(table.columns) != expected:
+        problems.append(f"power/power.csv: columns {list(table.columns)}, expected {expected}")
+    else:
+        print(f"check_figures: power drawn from {', '.join(sorted(set(table['population'])))}")
     # A panel per hypothesis (H1-H3) and metric (error, efficiency, relative effort).
     check_panels("power", power_figure(table), 9)
     finish("power table and figure complete")

@@ -56,6 +56,11 @@ def register(commands) -> None:
         "table", help="power.csv from the replicates' detections", **example(*_EXAMPLES["table"])
     )
     table.add_argument("--detections", required=True, nargs="+", metavar="CSV")
+    table.add_argument(
+        "--population",
+        default="simulation.population of the config",
+        help="whom the simulated participants were drawn from, written in each row",
+    )
     table.add_argument("--out", required=True, metavar="CSV", help="power.csv to write")
     table.set_defaults(func=_table)
     figure = steps.add_parser(
@@ -100,6 +105,7 @@ def _table(args) -> int:
         table = power_table([read_table(path) for path in sorted(args.detections)])
     except (OSError, ValueError) as error:
         return fail("power table", error)
+    table["population"] = args.population
     write_csv(args.out, table)
     files = len(args.detections)
     print(f"casa power table: {len(table)} row(s) from {files} file(s) -> {args.out}")

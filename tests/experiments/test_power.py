@@ -227,6 +227,11 @@ def test_the_commands_write_the_same_bytes_whatever_the_order(tmp_path):
     table = read_table(tmp_path / "a.csv")
     # 2 Ns x 3 hypotheses x 3 metrics x 2 forms, each from 2 replicates.
     assert len(table) == 36 and set(table["replicates"]) == {2}
+    assert set(table["population"]) == {"simulation.population of the config"}
+    fitted = ["--population", "lab.json, fitted by casa calibrate to dataset lab"]
+    assert main(["power", "table", "--detections", *written, *fitted, "--out",
+                 str(tmp_path / "c.csv")]) == 0  # fmt: skip
+    assert set(read_table(tmp_path / "c.csv")["population"]) == {fitted[1]}
     assert main(["power", "figure", "--power", str(tmp_path / "a.csv"), "--out",
                  str(tmp_path / "power")]) == 0  # fmt: skip
     assert (tmp_path / "power.png").stat().st_size > 0

@@ -115,8 +115,11 @@ rule power_table:
         "logs/power/table.log",
     conda:
         "../envs/casa.yaml"
+    params:
+        population=shlex.quote(population_label(config["simulation"])),
     shell:
-        "exec casa power table --detections {input} --out {output} > {log} 2>&1"
+        "exec casa power table --detections {input} --population {params.population} "
+        "--out {output} > {log} 2>&1"
 
 
 rule power_figure:
