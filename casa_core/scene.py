@@ -18,6 +18,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +27,8 @@ from typing import Any
 
 import numpy as np
 import yaml
+
+from casa_core.vocabulary import TELEOP_MODES
 
 #: The scene the package is set up with: ``config/scene.yaml`` of the repository. A path
 #: given by a user is resolved against the working directory instead.
@@ -43,10 +46,17 @@ class SceneError(ValueError):
 
 @dataclass(frozen=True)
 class Start:
-    """Where every trial starts: end-effector ``position`` (m) and the rotate keys' ``rot``."""
+    """Where every trial starts: end-effector ``position`` (m) and the rotate keys' ``rot``.
+
+    ``joints``, optional: the seven joint angles (rad) of that start, where the layout
+    gives them (the authors' start pose, whose tool orientation is not the held one). The
+    ``original`` teleoperation starts there; ``held`` starts at the inverse kinematics of
+    ``position`` with the held orientation.
+    """
 
     position: tuple[float, float, float]
     rot: float
+    joints: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -60,11 +70,13 @@ class Pouring:
 
 @dataclass(frozen=True)
 class Teleop:
-    """The keyboard: ``speed`` (m/s per key), ``rot_speed`` (rad/s) and the tick ``dt`` (s)."""
+    """The keyboard: ``speed`` (m/s per key), ``rot_speed`` (rad/s), the tick ``dt`` (s) and
+    the ``mode`` by which keys move the arm (:data:`~casa_core.vocabulary.TELEOP_MODES`)."""
 
     speed: float
     rot_speed: float
     dt: float
+    mode: str = "held"
 
 
 @dataclass(frozen=True)
@@ -94,6 +106,20 @@ class Scene:
         """The state ``[x, y, z, rot]`` in which every trial starts."""
         return np.array([*self.start.position, self.start.rot], dtype=float)
 
+    def with_teleop_mode(self, mode: str | None) -> Scene:
+        """The same layout driven by teleoperation ``mode``; ``None`` keeps the scene's.
+
+        Examples
+        --------
+        >>> load_scene().with_teleop_mode("original").teleop.mode
+        'original'
+        """
+        if mode is None:
+            return self
+        if mode not in TELEOP_MODES:
+            raise SceneError(f"teleop mode {mode!r}: expected one of {', '.join(TELEOP_MODES)}")
+        return dataclasses.replace(self, teleop=dataclasses.replace(self.teleop, mode=mode))
+
     def goal(self, name: str, point: str = "tool") -> np.ndarray:
         """The position of goal ``name`` at ``point`` (``"tool"`` or ``"link7"``).
 
@@ -113,7 +139,7 @@ class Scene:
         """Validate a parsed scene file; ``source`` names it in errors."""
         reader = _Reader(source)
         top = reader.mapping(data, "", ("start", "goals", "pouring", "teleop"), ("link7",))
-        start = reader.mapping(top["start"], "start", ("position", "rot"))
+        start = reader.mapping(top["start"], "start", ("position", "rot"), ("joints",))
         goals = reader.mapping(top["goals"], "goals", None)
         missing = [name for name in REQUIRED_GOALS if name not in goals]
         if missing:
@@ -121,13 +147,20 @@ class Scene:
                 f"{source}: goals.{missing[0]}: missing (required: green, purple, red)"
             )
         pouring = reader.mapping(top["pouring"], "pouring", ("position", "bowl", "tilt"))
-        teleop = reader.mapping(top["teleop"], "teleop", ("speed", "rot_speed", "dt"))
+        teleop = reader.mapping(top["teleop"], "teleop", ("speed", "rot_speed", "dt"), ("mode",))
+        mode = teleop.get("mode", "held")
+        if mode not in TELEOP_MODES:
+            reader.fail("teleop.mode", f"must be one of {', '.join(TELEOP_MODES)}, got {mode!r}")
         link7 = reader.mapping(top.get("link7", {}), "link7", None)
         for name in link7:
             if name not in goals:
                 reader.fail(f"link7.{name}", f"not a goal of the scene ({', '.join(goals)})")
         return cls(
-            start=Start(reader.vector(start, "start.position"), reader.number(start, "start.rot")),
+            start=Start(
+                reader.vector(start, "start.position"),
+                reader.number(start, "start.rot"),
+                reader.joints(start, "start.joints") if "joints" in start else None,
+            ),
             goals=MappingProxyType(
                 {str(name): reader.vector(goals, f"goals.{name}") for name in goals}
             ),
@@ -140,6 +173,7 @@ class Scene:
                 reader.number(teleop, "teleop.speed", positive=True),
                 reader.number(teleop, "teleop.rot_speed", positive=True),
                 reader.number(teleop, "teleop.dt", positive=True),
+                mode,
             ),
             link7_goals=MappingProxyType(
                 {str(name): reader.vector(link7, f"link7.{name}") for name in link7}
@@ -206,12 +240,22 @@ class _Reader:
             self.fail(key, f"must be positive, got {value!r}")
         return float(value)
 
-    def vector(self, node: dict, key: str) -> tuple[float, float, float]:
+    def numbers(self, node: dict, key: str, count: int, what: str) -> tuple[float, ...]:
+        """``count`` finite numbers at ``key``; ``what`` says what they are in the error."""
         value = node[key.rsplit(".", 1)[-1]]
         numbers = isinstance(value, list) and all(
             isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
             for v in value
         )
-        if not numbers or len(value) != 3:
-            self.fail(key, f"must be 3 finite numbers [x, y, z], got {value!r}")
-        return (float(value[0]), float(value[1]), float(value[2]))
+        if not numbers or len(value) != count:
+            self.fail(key, f"must be {count} finite {what}, got {value!r}")
+        return tuple(float(v) for v in value)
+
+    def joints(self, node: dict, key: str) -> tuple[float, ...]:
+        """Seven joint angles given in degrees (the original's convention), in radians."""
+        degrees = self.numbers(node, key, 7, "joint angles in degrees")
+        return tuple(math.radians(v) for v in degrees)
+
+    def vector(self, node: dict, key: str) -> tuple[float, float, float]:
+        x, y, z = self.numbers(node, key, 3, "numbers [x, y, z]")
+        return (x, y, z)

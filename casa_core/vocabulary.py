@@ -110,6 +110,10 @@ EVIDENCE = ("commanded", "executed")
 #: Where inference measures the arm: the tool point (this project's end effector) or the
 #: origin of link 7, 0.16 m before it (the original implementation's end effector).
 POINTS = ("tool", "link7")
+#: How the keys move the arm: ``held``, the tool point by a Cartesian velocity with the
+#: tool orientation held (this project's); ``original``, link 7's target by position-only
+#: inverse kinematics, the orientation following the reach (the authors' implementation).
+TELEOP_MODES = ("held", "original")
 
 
 def condition_of(method: str, phase: str) -> str | None:

@@ -16,7 +16,8 @@ NO_CONFIG = (
 
 
 def load_workflow_config(args) -> tuple[dict, Scene]:
-    """The validated workflow config (``--config``, repeatable) and the scene it names.
+    """The validated workflow config (``--config``, repeatable) and the scene it names,
+    driven by the config's ``teleop.mode`` where it sets one.
 
     Without ``--config``, the package's defaults (:func:`casa_core.config.load_config`
     of no file) and its own scene, so that the command works from any folder. Read
@@ -26,7 +27,7 @@ def load_workflow_config(args) -> tuple[dict, Scene]:
     from casa_core.scene import load_scene
 
     config = load_config(*(args.config or ()))
-    return config, load_scene(config["scene"])
+    return config, load_scene(config["scene"]).with_teleop_mode(config["teleop"]["mode"])
 
 
 def add_config_option(command, what: str = "workflow config") -> None:

@@ -32,6 +32,12 @@ def register(commands) -> None:
 
     trial_options(command)
     scene_option(command)
+    command.add_argument(
+        "--teleop-mode",
+        choices=vocabulary.TELEOP_MODES,
+        help="how the keys move the arm (docs/departures.md): the tool orientation held, or "
+        "the original implementation's position-only IK of link 7 (default: the scene's)",
+    )
     command.add_argument("--max-duration", type=positive_float, default=60.0, metavar="SECONDS")
     command.add_argument(
         "--intent",
@@ -77,7 +83,8 @@ def _teleop(args) -> int:
     from casa_core.study.closed_loop import trial_intents
     from casa_core.study.teleop_session import teleop_session
 
-    scene = load_scene(args.scene)  # a SceneError is reported by casa_core.cli.main
+    # A SceneError is reported by casa_core.cli.main.
+    scene = load_scene(args.scene).with_teleop_mode(args.teleop_mode)
     inference = preset(args.preset, evidence=args.evidence)
     try:
         stems, detected = teleop_session(

@@ -15,8 +15,14 @@ Each tick of ``dt`` (0.05 s):
 
 Nothing holds the tool's orientation: it follows the reach. The target is kept from tick to
 tick (a key moves the target, not the arm), and :meth:`OriginalTeleoperation.reset` puts it
-on link 7 where the arm is. The speeds are the scene's ``teleop`` ones (the original's).
-The other teleoperation, which holds the orientation, is
+on link 7 where the arm is.
+
+Shared autonomy blends in joint space, as the original does: :meth:`~OriginalTeleoperation.follow`
+turns the robot's Cartesian action u* into joint velocities the same way (position-only
+inverse kinematics, of the tool point, whose velocity u* is), and
+:meth:`~OriginalTeleoperation.tool_velocity` says what a joint command does to the state
+``[x, y, z, rot]``, the user's action T(a) that inference observes. The speeds are the
+scene's ``teleop`` ones (the original's). The other teleoperation, which holds the orientation, is
 :meth:`casa_core.robot.sim.ArmSimulation.step` with :func:`casa_core.robot.keys.keys_to_action`.
 
 Examples
@@ -38,10 +44,12 @@ from collections.abc import Iterable
 import numpy as np
 import pybullet as p
 
+from casa_core.fixed_order import matmul
 from casa_core.robot.keys import KEY_DIRECTIONS, check_keys
 
 #: pybullet's index of link 7 (the last arm link) in casa's URDF; the tool is index 7.
 LINK7 = 6
+TOOL = LINK7 + 1
 
 
 class OriginalTeleoperation:
@@ -87,5 +95,39 @@ class OriginalTeleoperation:
         command[-1] += self.rot_speed * direction[3]
         return command
 
+    def follow(self, velocity) -> np.ndarray:
+        """Joint velocities ``(7,)`` that move the tool point at ``velocity`` =
+        ``[vx, vy, vz, vrot]`` for one tick: position-only inverse kinematics of the tool
+        point moved by ``v * dt``, and ``vrot`` on joint 7. The target is not touched."""
+        velocity = np.asarray(velocity, dtype=float)
+        command = np.zeros(len(self.sim.q))
+        if np.any(velocity[:3]):
+            position, _ = self.sim.ee_pose()
+            solution = p.calculateInverseKinematics(
+                self.sim.robot,
+                TOOL,
+                (position + velocity[:3] * self.dt).tolist(),
+                physicsClientId=self.sim.client,
+            )
+            command = (np.asarray(solution[: len(command)]) - self.sim.q) / self.dt
+        command[-1] += velocity[3]
+        return command
 
-__all__ = ["LINK7", "OriginalTeleoperation"]
+    def tool_velocity(self, command) -> np.ndarray:
+        """``[vx, vy, vz, vrot]`` of joint velocities ``command``: the tool point's velocity
+        through pybullet's Jacobian at the current joints, and joint 7's turn."""
+        command = np.asarray(command, dtype=float)
+        zeros = [0.0] * len(command)
+        linear, _ = p.calculateJacobian(
+            self.sim.robot,
+            TOOL,
+            [0.0, 0.0, 0.0],
+            self.sim.q.tolist(),
+            zeros,
+            zeros,
+            physicsClientId=self.sim.client,
+        )
+        return np.array([*matmul(np.asarray(linear), command), command[-1]])
+
+
+__all__ = ["LINK7", "TOOL", "OriginalTeleoperation"]

@@ -92,9 +92,9 @@ class ArmSimulation:
         pybullet's window options (``p.connect``'s ``options``), e.g.
         ``"--width=1024 --height=768"``.
     start_q : array_like, optional
-        Joint angles (rad) to start at, instead of the inverse kinematics of the scene's
-        start state: a start given as the original's joint angles, whose tool
-        orientation is not the held one.
+        Joint angles (rad) to start at; default the scene's ``start.joints`` where it
+        gives them (the original's start angles, whose tool orientation is not the held
+        one), else the inverse kinematics of the scene's start state.
 
     Notes
     -----
@@ -143,6 +143,8 @@ class ArmSimulation:
         self._q = np.zeros(kin.N_JOINTS)
         self._state = np.zeros(4)
         self._reference = np.zeros(4)
+        if start_q is None:
+            start_q = scene.start.joints  # a start given as joint angles, where it is
         self.reset(scene.start_state, q=start_q)
 
     # -- lifecycle ---------------------------------------------------------------------

@@ -4,6 +4,8 @@
   participants (operator models) and the path geometry their keys follow;
 - :mod:`~casa_core.study.key_sources`: scripted key sources and their protocol;
 - :mod:`~casa_core.study.closed_loop`: one trial, pybullet in the loop;
+  :mod:`~casa_core.study.drive`: how a tick's keys and the robot's action move the arm, per
+  teleoperation mode;
 - :mod:`~casa_core.study.teleop_session`: a person's session at the window (``casa teleop``);
 - :mod:`~casa_core.study.protocol`: the trials in order, counterbalancing, misspecification;
 - :mod:`~casa_core.study.session`: a participant's whole study (``casa session``), its

@@ -2,9 +2,10 @@
 
 Every control tick (0.05 s) :func:`run_trial` reads the arm's state ``[x, y, z, rot]``
 from pybullet, asks the key source (:mod:`casa_core.study.key_sources`) which keys are
-held, turns them into the user's Cartesian action (the paper's direct teleoperation T),
-lets the :class:`~casa_core.assist.assistant.Assistant` blend it with the robot's action u*,
-and drives the arm with the blend for one tick. Every 0.5 s (twice per second, as in
+held, turns them into the user's action (the paper's direct teleoperation T), lets the
+:class:`~casa_core.assist.assistant.Assistant` blend it with the robot's action u*, and
+drives the arm with the blend for one tick, the way the scene's ``teleop.mode`` says
+(:mod:`casa_core.study.drive`). Every 0.5 s (twice per second, as in
 the paper) the assistant first updates its inference with the state reached. The trial
 ends when the key source says it is done or at ``max_duration``.
 
@@ -29,9 +30,10 @@ from casa_core.assist.intents import GoalIntent, Intent
 from casa_core.assist.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.defaults import DT
 from casa_core.io import write_trial
-from casa_core.robot.keys import check_keys, format_keys, keys_to_action
+from casa_core.robot.keys import check_keys, format_keys
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import KNOWN_GOALS, Scene
+from casa_core.study.drive import scene_drive
 from casa_core.study.key_sources import KeySource
 from casa_core.vocabulary import METHOD_ARBITRATION as LOGGED_ARBITRATION
 from casa_core.vocabulary import METHODS, TASK_PHASES
@@ -256,9 +258,9 @@ def trial_meta(
 
 
 def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick):
-    teleop = scene.teleop
-    dt = teleop.dt
-    state = sim.reset(scene.start_state)
+    dt = scene.teleop.dt
+    drive = scene_drive(sim, scene)
+    state = drive.start()
     assistant.reset(state)
     names = assistant.names
     # No evidence before the first inference step: beta_hat = 0, uniform belief.
@@ -290,8 +292,5 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
         # A trial ended at once still has its start and one tick (the log's two-rows rule).
         if tick > 0 and getattr(source, "done", False):
             break
-        user_action = keys_to_action(held, teleop.speed, teleop.rot_speed)
-        elapsed = (tick % ticks_per_inference) * dt
-        action = assistant.act(state, user_action, elapsed_in_step=elapsed)
-        state = sim.step(action)
+        state = drive.tick(assistant, state, held, (tick % ticks_per_inference) * dt)
     return rows

@@ -1,0 +1,106 @@
+"""How a control tick's keys and the robot's action move the arm, per teleoperation mode.
+
+The scene's ``teleop.mode`` (:data:`casa_core.vocabulary.TELEOP_MODES`) chooses:
+
+- ``held`` (:class:`HeldDrive`): the keys are a Cartesian velocity of the tool point, T(a);
+  the assistant blends it with the robot's u* and the simulation's Cartesian controller
+  drives the blend, holding the tool orientation.
+- ``original`` (:class:`OriginalDrive`): the keys move a target for link 7 and
+  position-only inverse kinematics gives the user's joint velocities, as in the authors'
+  implementation (:class:`casa_core.robot.original_teleop.OriginalTeleoperation`). The
+  robot's u* becomes joint velocities the same way, and the two are blended in joint
+  space, ``alpha q_user + (1 - alpha) q_robot``, as the original blends. Inference observes
+  the tool-point velocity of the user's joint command as T(a).
+
+Both start the arm at the scene's start: ``original`` at its joint angles where the scene
+gives them (``start.joints``), ``held`` at the inverse kinematics of its position with the
+held orientation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from casa_core.assist.assistant import Assistant
+from casa_core.model.arbitration import blend
+from casa_core.robot.keys import keys_to_action
+from casa_core.robot.original_teleop import OriginalTeleoperation
+from casa_core.robot.sim import ArmSimulation
+from casa_core.scene import Scene
+
+
+class HeldDrive:
+    """Cartesian keys, blended in Cartesian space, the tool orientation held."""
+
+    def __init__(self, sim: ArmSimulation, scene: Scene):
+        self.sim = sim
+        self.scene = scene
+
+    def start(self) -> np.ndarray:
+        """Put the arm at the scene's start; return the state read back."""
+        return self.sim.reset(self.scene.start_state)
+
+    def tick(self, assistant: Assistant, state, held, elapsed_in_step: float) -> np.ndarray:
+        """Drive one tick with the held keys and the assistant's blend; return the new state."""
+        teleop = self.scene.teleop
+        user_action = keys_to_action(held, teleop.speed, teleop.rot_speed)
+        action = assistant.act(state, user_action, elapsed_in_step=elapsed_in_step)
+        return self.sim.step(action)
+
+
+class OriginalDrive:
+    """The original's keys (link 7's target, position-only IK), blended in joint space."""
+
+    def __init__(self, sim: ArmSimulation, scene: Scene):
+        self.sim = sim
+        self.scene = scene
+        self.teleop = OriginalTeleoperation(sim)
+
+    def start(self) -> np.ndarray:
+        """Put the arm at the scene's start joints (or its start state); return the state."""
+        joints = self.scene.start.joints
+        state = self.sim.reset(self.scene.start_state, q=None if joints is None else joints)
+        self.teleop.reset()
+        return state
+
+    def tick(self, assistant: Assistant, state, held, elapsed_in_step: float) -> np.ndarray:
+        """Drive one tick; return the new state.
+
+        The user's joint command is recorded by the assistant as its tool-point velocity
+        (the evidence of inference). While the user has full authority the arm gets that
+        command alone, exactly the original's; otherwise the blend with the robot's u* in
+        joint space, after which the keys' target is put back on link 7, so that the next
+        key moves on from where the assisted arm is instead of pulling it back.
+        """
+        user_joints = self.teleop.joint_command(held)
+        user_action = self.teleop.tool_velocity(user_joints)
+        assistant.act(state, user_action, elapsed_in_step=elapsed_in_step)
+        alpha = 1.0 if assistant.latest is None else assistant.latest.alpha
+        if alpha >= 1.0:
+            return self.sim.step_joints(user_joints)
+        robot_joints = self.teleop.follow(assistant.robot_action(state, elapsed_in_step))
+        state = self.sim.step_joints(blend(alpha, user_joints, robot_joints))
+        self.teleop.reset()
+        return state
+
+
+DRIVES: dict[str, type[HeldDrive] | type[OriginalDrive]] = {
+    "held": HeldDrive,
+    "original": OriginalDrive,
+}
+
+
+def scene_drive(sim: ArmSimulation, scene: Scene) -> HeldDrive | OriginalDrive:
+    """The drive of the scene's teleoperation mode.
+
+    Examples
+    --------
+    >>> from casa_core.scene import load_scene
+    >>> with ArmSimulation(load_scene()) as sim:
+    ...     type(scene_drive(sim, load_scene().with_teleop_mode("original"))).__name__
+    'OriginalDrive'
+    """
+    return DRIVES[scene.teleop.mode](sim, scene)
+
+
+__all__ = ["DRIVES", "HeldDrive", "OriginalDrive", "scene_drive"]
