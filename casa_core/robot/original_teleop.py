@@ -11,7 +11,9 @@ Each tick of ``dt`` (0.05 s):
   from the current joint angles) gives joint angles ``q_ik``, and the command is
   ``(q_ik - q) / dt``; if it did not move, the arm's joints are commanded to rest;
 - each rotate key adds ``rot_speed`` (0.5 rad/s, 0.025 rad per tick) to joint 7's velocity:
-  the wrist turns, not a Cartesian rotation.
+  the wrist turns, not a Cartesian rotation. ``rot+`` turns joint 7 backwards, as the rotate
+  keys of the held teleoperation do (:mod:`casa_core.robot.sim`) and as ``casa import
+  original`` names the original's wrist commands, so that ``rot+`` pours in both.
 
 Nothing holds the tool's orientation: it follows the reach. The target is kept from tick to
 tick (a key moves the target, not the arm), and :meth:`OriginalTeleoperation.reset` puts it
@@ -92,13 +94,14 @@ class OriginalTeleoperation:
                 physicsClientId=self.sim.client,
             )
             command = (np.asarray(solution[: len(command)]) - self.sim.q) / self.dt
-        command[-1] += self.rot_speed * direction[3]
+        command[-1] -= self.rot_speed * direction[3]  # rot+ turns joint 7 backwards
         return command
 
     def follow(self, velocity) -> np.ndarray:
         """Joint velocities ``(7,)`` that move the tool point at ``velocity`` =
         ``[vx, vy, vz, vrot]`` for one tick: position-only inverse kinematics of the tool
-        point moved by ``v * dt``, and ``vrot`` on joint 7. The target is not touched."""
+        point moved by ``v * dt``, and ``vrot`` on joint 7 (backwards, as ``rot+``). The
+        target is not touched."""
         velocity = np.asarray(velocity, dtype=float)
         command = np.zeros(len(self.sim.q))
         if np.any(velocity[:3]):
@@ -110,12 +113,13 @@ class OriginalTeleoperation:
                 physicsClientId=self.sim.client,
             )
             command = (np.asarray(solution[: len(command)]) - self.sim.q) / self.dt
-        command[-1] += velocity[3]
+        command[-1] -= velocity[3]
         return command
 
     def tool_velocity(self, command) -> np.ndarray:
         """``[vx, vy, vz, vrot]`` of joint velocities ``command``: the tool point's velocity
-        through pybullet's Jacobian at the current joints, and joint 7's turn."""
+        through pybullet's Jacobian at the current joints, and joint 7's turn (backwards
+        positive, as ``rot+``)."""
         command = np.asarray(command, dtype=float)
         zeros = [0.0] * len(command)
         linear, _ = p.calculateJacobian(
@@ -127,7 +131,7 @@ class OriginalTeleoperation:
             zeros,
             physicsClientId=self.sim.client,
         )
-        return np.array([*matmul(np.asarray(linear), command), command[-1]])
+        return np.array([*matmul(np.asarray(linear), command), -command[-1]])
 
 
 __all__ = ["LINK7", "TOOL", "OriginalTeleoperation"]

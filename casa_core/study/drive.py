@@ -10,7 +10,9 @@ The scene's ``teleop.mode`` (:data:`casa_core.vocabulary.TELEOP_MODES`) chooses:
   implementation (:class:`casa_core.robot.original_teleop.OriginalTeleoperation`). The
   robot's u* becomes joint velocities the same way, and the two are blended in joint
   space, ``alpha q_user + (1 - alpha) q_robot``, as the original blends. Inference observes
-  the tool-point velocity of the user's joint command as T(a).
+  the tool-point velocity of the user's joint command as T(a). The state's ``rot`` is the
+  wrist turn: the scene's start ``rot`` plus joint 7's turn (backwards positive, as
+  ``rot+``) since the start, since the tool's orientation no longer tells it.
 
 Both start the arm at the scene's start: ``original`` at its joint angles where the scene
 gives them (``start.joints``), ``held`` at the inverse kinematics of its position with the
@@ -61,6 +63,13 @@ class OriginalDrive:
         joints = self.scene.start.joints
         state = self.sim.reset(self.scene.start_state, q=None if joints is None else joints)
         self.teleop.reset()
+        self._wrist_start = float(self.sim.q[-1])
+        return self._with_wrist_turn(state)
+
+    def _with_wrist_turn(self, state: np.ndarray) -> np.ndarray:
+        """``state`` with ``rot`` the wrist turn since the start (module docstring)."""
+        state = state.copy()
+        state[3] = self.scene.start.rot - (float(self.sim.q[-1]) - self._wrist_start)
         return state
 
     def tick(self, assistant: Assistant, state, held, elapsed_in_step: float) -> np.ndarray:
@@ -77,11 +86,11 @@ class OriginalDrive:
         assistant.act(state, user_action, elapsed_in_step=elapsed_in_step)
         alpha = 1.0 if assistant.latest is None else assistant.latest.alpha
         if alpha >= 1.0:
-            return self.sim.step_joints(user_joints)
+            return self._with_wrist_turn(self.sim.step_joints(user_joints))
         robot_joints = self.teleop.follow(assistant.robot_action(state, elapsed_in_step))
         state = self.sim.step_joints(blend(alpha, user_joints, robot_joints))
         self.teleop.reset()
-        return state
+        return self._with_wrist_turn(state)
 
 
 DRIVES: dict[str, type[HeldDrive] | type[OriginalDrive]] = {

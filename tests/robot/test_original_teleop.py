@@ -44,7 +44,9 @@ def reference_command(sim, target, keys):
         # Link 7 is pybullet's link 6 in casa's URDF (its link 7 is the tool point).
         ik = p.calculateInverseKinematics(sim.robot, 6, list(moved), physicsClientId=sim.client)
         command = (np.array(ik[:7]) - np.array(joints)) / time_step
-    command[6] += (wrist_step / time_step) * (("rot+" in keys) - ("rot-" in keys))
+    # The original's two wrist keys are our rot+ and rot-; rot+ turns joint 7 backwards,
+    # as the held mode's rotate key and the importer's naming do.
+    command[6] -= (wrist_step / time_step) * (("rot+" in keys) - ("rot-" in keys))
     return moved, command
 
 
@@ -111,6 +113,6 @@ def test_the_rotate_keys_turn_joint_7_at_the_rotate_speed():
             sim.step_joints(teleop.joint_command({"rot+"}))
         turned = sim.q - before
         # Within a degree of 0.5 rad; the other joints and link 7 stay where they were.
-        assert turned[6] == pytest.approx(teleop.rot_speed * 1.0, abs=np.radians(1))
+        assert turned[6] == pytest.approx(-teleop.rot_speed * 1.0, abs=np.radians(1))
         np.testing.assert_allclose(turned[:6], 0.0, atol=1e-3)
         np.testing.assert_allclose(sim.link7(), position, atol=1e-3)

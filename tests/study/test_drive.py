@@ -20,6 +20,7 @@ from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import SceneError, load_scene
 from casa_core.study.closed_loop import run_trial
 from casa_core.study.drive import OriginalDrive, scene_drive
+from casa_core.study.key_sources import ScriptedKeys
 from tests.robot.test_original_teleop import START_Q, reference_command
 
 ORIGINAL_SCENE = load_scene(DEFAULT_CONFIG.with_name("scene-original.yaml"))
@@ -211,3 +212,20 @@ def test_the_config_and_the_teleop_flag_choose_the_mode_over_the_scenes(tmp_path
     assert main([*trial, "--teleop-mode", "original"]) == 0
     assert main(trial) == 0
     assert seen == ["original", "held"]
+
+
+@pytest.mark.parametrize("mode", ["held", "original"])
+def test_rot_plus_turns_the_wrist_forward_in_the_state_in_both_modes(mode):
+    # One second of rot+ at 0.5 rad/s: the state's rot grows by 0.5 rad and the tool point
+    # stays (joint 7's axis runs through it: 0.16 m along the axis from link 7).
+    scene = load_scene() if mode == "held" else ORIGINAL_SCENE
+    frame = run_trial(
+        scene, "known_goal", "NA", ScriptedKeys([(1.0, ["rot+"])]), participant="p"
+    ).frame
+    turn = frame["rot"].iloc[-1] - frame["rot"].iloc[0]
+    assert turn == pytest.approx(0.5, abs=np.radians(2))
+    moved = frame[["x", "y", "z"]].iloc[-1] - frame[["x", "y", "z"]].iloc[0]
+    assert np.abs(moved.to_numpy()).max() < 0.005
+    if mode == "original":
+        # The wrist turn is joint 7's, backwards.
+        assert frame["q7"].iloc[-1] - frame["q7"].iloc[0] == pytest.approx(-turn, abs=1e-9)
