@@ -104,9 +104,10 @@ def test_the_study_config_is_complete_and_ci_only_overlays_it():
     assert study == load_config(DEFAULT_CONFIG)
     ci = load_config(CONFIG, CI)
     assert ci["simulation"]["participants"] == 3
-    # The robustness target in CI: 2 participants under the default and original variants.
+    # The robustness target in CI: 2 participants under the default and original variants,
+    # and the authors' setup.
     assert ci["robustness"]["participants"] == 2
-    assert ci["robustness"]["run"] == ["default", "original"]
+    assert ci["robustness"]["run"] == ["default", "original", "authors"]
     assert ci["robustness"]["variants"] == study["robustness"]["variants"]
     ci["simulation"]["participants"] = study["simulation"]["participants"]
     ci["robustness"] = study["robustness"]
@@ -116,7 +117,7 @@ def test_the_study_config_is_complete_and_ci_only_overlays_it():
     assert ci == study
     assert yaml.safe_load(CI.read_text()) == {
         "simulation": {"participants": 3},
-        "robustness": {"participants": 2, "run": ["default", "original"]},
+        "robustness": {"participants": 2, "run": ["default", "original", "authors"]},
         "power": {"sizes": [2, 3], "replicates": 2},
     }
 

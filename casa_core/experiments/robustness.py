@@ -1,35 +1,43 @@
 """Modelling variants of the simulated study: the config's ``robustness`` block.
 
 The paper leaves modelling choices open (the inference preset, the evidence, the
-operator model). Each variant of ``robustness.variants`` is an overlay of those keys
-only (:data:`OVERLAY_KEYS`) on the study's config; :func:`variant_config` builds the
-whole config one variant's jobs read. Every variant keeps the study's seeds, scene and
-population, so that variants differ in the overlaid choices alone. The variant named
-:data:`DEFAULT_VARIANT` overlays nothing: it is the study's own settings.
+operator model), and the study can run on two setups (the scene and its teleoperation:
+ours, or the authors' layout driven the authors' way). Each variant of
+``robustness.variants`` is an overlay of those keys only (:data:`OVERLAY_KEYS`) on the
+study's config; :func:`variant_config` builds the whole config one variant's jobs read.
+Every variant keeps the study's seeds and population, so that variants differ in the
+overlaid choices alone. The variant named :data:`DEFAULT_VARIANT` overlays nothing: it is
+the study's own settings.
 
 Examples
 --------
 >>> from casa_core.config import DEFAULT_CONFIG, load_config
 >>> config = load_config(DEFAULT_CONFIG)
 >>> variant_names(config)
-['default', 'original', 'paper', 'executed', 'lookahead']
+['default', 'original', 'paper', 'executed', 'lookahead', 'authors']
 >>> built = variant_config(config, "lookahead")
 >>> built["simulation"]["operator"], built["inference"]["preset"]
 ('lookahead', 'casa')
 >>> settings_text(variant_config(config, "original"))
 'preset original, evidence executed, operator predictive'
+>>> settings_text(variant_config(config, "authors"))
+'scene scene-original.yaml (teleop original), preset casa, evidence commanded, operator predictive'
 """
 
 from __future__ import annotations
 
 import copy
 from collections.abc import Mapping
+from pathlib import PurePath
 
 from casa_core.assist.presets import preset
 from casa_core.config import merge, validate_config
 
-#: The keys an overlay may set: section -> its keys (None: every key of the section).
+#: The keys an overlay may set: section -> its keys (None: every key of the section, or
+#: the whole value of a key that is not a section, such as ``scene``).
 OVERLAY_KEYS: dict[str, tuple[str, ...] | None] = {
+    "scene": None,
+    "teleop": None,
     "inference": None,
     "simulation": ("operator",),
 }
@@ -88,7 +96,8 @@ def variant_config(config: Mapping, name: str, *, participants: int | None = Non
 
 
 def settings_text(config: Mapping) -> str:
-    """The modelling choices of a config in words: preset, evidence (resolved), operator.
+    """The modelling choices of a config in words: preset, evidence (resolved), operator;
+    first its setup (:func:`setup_text`) where it names one.
 
     Examples
     --------
@@ -99,4 +108,35 @@ def settings_text(config: Mapping) -> str:
     inference = config["inference"]
     evidence = preset(inference["preset"], evidence=inference.get("evidence")).evidence
     operator = config["simulation"]["operator"]
-    return f"preset {inference['preset']}, evidence {evidence}, operator {operator}"
+    words = f"preset {inference['preset']}, evidence {evidence}, operator {operator}"
+    setup = setup_text(config)
+    return f"{setup}, {words}" if setup else words
+
+
+def setup_text(config: Mapping) -> str:
+    """The setup a config names, in words: its scene file's name and, where the config
+    sets one, its teleoperation mode; empty when it names neither.
+
+    Examples
+    --------
+    >>> setup_text({"scene": "config/scene.yaml", "teleop": {"mode": "held"}})
+    'scene scene.yaml (teleop held)'
+    """
+    scene = config.get("scene")
+    mode = (config.get("teleop") or {}).get("mode")
+    if scene is None and mode is None:
+        return ""
+    words = f"scene {PurePath(scene).name}" if scene else "the package's scene"
+    if mode is None and scene:
+        mode = _scene_mode(scene)
+    return f"{words} (teleop {mode})" if mode else words
+
+
+def _scene_mode(path) -> str | None:
+    """The teleoperation mode a scene file declares; None where it cannot be read."""
+    from casa_core.scene import SceneError, load_scene
+
+    try:
+        return load_scene(path).teleop.mode
+    except SceneError:
+        return None

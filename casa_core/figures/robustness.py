@@ -117,8 +117,9 @@ def robustness_figure(claims: pd.DataFrame) -> Figure:
         ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), title="verdict")
         caption = (
             "The paper's claims (rows) judged on the simulated study under each modelling "
-            "variant (columns), the same participants and seeds in each; the number is the "
-            "share of trials or checks meeting the claim's criterion."
+            "variant (columns; its setup, layout and teleoperation, as results.md lists it), "
+            "the same participants and seeds in each; the number is the share of trials or "
+            "checks meeting the claim's criterion."
         )
         if DEFAULT_VARIANT in cols:
             caption += f" Framed: the default variant ({DEFAULT_VARIANT}, the study's config)."

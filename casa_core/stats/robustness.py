@@ -121,8 +121,9 @@ def robustness_markdown(claims: pd.DataFrame, *, provenance: str = "") -> str:
         "each; only the modelling choices below differ. Each claim is judged as in a "
         "dataset's results.md (casa_core/stats/claims.py); the number in brackets is the "
         "one behind the verdict (the share of trials or checks meeting the criterion). "
-        f"The default variant, `{DEFAULT_VARIANT}`, is the study's own config. The scene "
-        "is the same in every variant (docs/departures.md says why).",
+        f"The default variant, `{DEFAULT_VARIANT}`, is the study's own config. A variant's "
+        "settings name its setup, the scene file and how its keys move the arm (teleop "
+        "held or original, docs/departures.md), where the config names one.",
         "",
         "## Variants",
         "",

@@ -39,7 +39,16 @@ def _overlay(tmp_path, data) -> str:
 @pytest.mark.parametrize(
     "variant, message",
     [
-        ({"mine": {"scene": "config/scene-original.yaml"}}, "robustness.variants.mine.scene: "),
+        (
+            {"mine": {"statistics": {"alpha": 0.1}}},
+            "robustness.variants.mine.statistics: unknown key (allowed: scene, teleop, inference, "
+            "simulation)",
+        ),
+        ({"mine": {"scene": ""}}, "robustness.variants.mine.scene: must not be empty"),
+        (
+            {"mine": {"teleop": {"mode": "joystick"}}},
+            "robustness.variants.mine.teleop.mode: must be one of None, held, original",
+        ),
         ({"mine": {"simulation": {"seed": 3}}}, "robustness.variants.mine.simulation.seed: "),
         (
             {"mine": {"inference": {"preset": "orignal"}}},
@@ -76,12 +85,13 @@ def test_the_variants_to_run_must_be_defined(tmp_path):
 def test_a_variant_changes_only_its_overlay_and_keeps_the_seeds():
     study = load_config(CONFIG)
     names = variants.variant_names(study)
-    assert names == ["default", "original", "paper", "executed", "lookahead"]
+    assert names == ["default", "original", "paper", "executed", "lookahead", "authors"]
     for name in names:
         built = variants.variant_config(study, name)
         overlay = study["robustness"]["variants"][name]
         # Undo the overlay and the participant count: what is left is the study's config.
         undone = {**built, "inference": study["inference"]}
+        undone.update(scene=study["scene"], teleop=study["teleop"])
         undone["simulation"] = {**built["simulation"], "operator": study["simulation"]["operator"]}
         undone["simulation"]["participants"] = study["simulation"]["participants"]
         expected = {k: v for k, v in study.items() if k not in variants.RUNNING_BLOCKS}
@@ -89,6 +99,11 @@ def test_a_variant_changes_only_its_overlay_and_keeps_the_seeds():
         assert built["simulation"]["seed"] == study["simulation"]["seed"]
         assert built["inference"] == {**study["inference"], **overlay.get("inference", {})}
     assert variants.variant_config(study, "default")["inference"] == study["inference"]
+    # The authors' setup: their layout, whose scene file says how its keys move the arm.
+    authors = variants.variant_config(study, "authors")
+    assert authors["scene"] == "config/scene-original.yaml" and authors["teleop"]["mode"] is None
+    assert variants.settings_text(authors).startswith("scene scene-original.yaml (teleop original)")
+    assert variants.settings_text(study).startswith("scene scene.yaml (teleop held)")
     with pytest.raises(KeyError, match="no variant 'nope'"):
         variants.variant_config(study, "nope")
 
@@ -129,13 +144,24 @@ def dry_run(tmp_path, target: str):
 @pytest.mark.pipeline
 def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
     repo, jobs, counts = dry_run(tmp_path, "robustness")
-    # ci.yaml: 2 variants x 2 participants, one job each (its whole protocol).
-    assert counts["robustness_participant"] == 4
+    # ci.yaml: 3 variants x 2 participants, one job each (its whole protocol).
+    assert counts["robustness_participant"] == 6
     assert not {"robustness_before", "robustness_learn", "robustness_after"} & set(counts.index)
-    assert counts["robustness_process"] == counts["robustness_claims"] == 2
-    assert counts["robustness_case_study"] == 2
+    assert counts["robustness_process"] == counts["robustness_claims"] == 3
+    assert counts["robustness_case_study"] == 3
     assert counts["robustness_table"] == 1
-    assert counts["robustness_progress"] == 2  # a line after each variant
+    assert counts["robustness_progress"] == 3  # a line after each variant
+    # Each variant's tables measure against its own setup's scene.
+    scenes = {
+        job["output"][0].split("/")[3]: job["shell"].split("--scene ")[1].split()[0]
+        for job in jobs
+        if job["rule"] == "robustness_process"
+    }
+    assert scenes == {
+        "default": "config/scene.yaml",
+        "original": "config/scene.yaml",
+        "authors": "config/scene-original.yaml",
+    }
     for job in jobs:
         if job["rule"] == "robustness_participant":
             # The participant's before and after logs, an intent library, a learning row
@@ -331,7 +357,10 @@ def test_the_claims_command_writes_one_variants_rows(tmp_path):
     claims = pd.read_csv(out, keep_default_na=False)
     assert list(claims.columns) == ROBUSTNESS_COLUMNS
     assert set(claims["variant"]) == {"original"}
-    assert set(claims["settings"]) == {"preset original, evidence executed, operator predictive"}
+    expected = (
+        "scene scene.yaml (teleop held), preset original, evidence executed, operator predictive"
+    )
+    assert set(claims["settings"]) == {expected}
     # By construction: green ends the most confident (2.5 > epsilon 1) and alpha falls to
     # 0.3 < 0.5 in the one Known Goal trial, so C1 holds with a share of 1.
     c1 = claims.set_index("claim").loc["C1"]

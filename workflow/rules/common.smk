@@ -277,6 +277,16 @@ def variant_config_input(wildcards):
     return VARIANT_CONFIGS[wildcards.variant]
 
 
+def variant_scene(settings):
+    """The scene file of a variant's whole config (the package's where it names none)."""
+    return settings["scene"] or os.path.relpath(DEFAULT_SCENE)
+
+
+def variant_scene_input(wildcards):
+    """The scene file of a robustness variant (its overlay may name another setup)."""
+    return variant_scene(casa_variants.variant_config(config, wildcards.variant))
+
+
 def margin_options(wildcards=None):
     """The config's non-inferiority margins (statistics) as casa stats options."""
     from casa_core.stats.margins import Margins
@@ -313,6 +323,11 @@ def replicate_config_file(variant, r):
 
 def replicate_config_input(wildcards):
     return replicate_config_file(wildcards.variant, wildcards.r)
+
+
+def power_scene_input(wildcards):
+    """The scene file of a power variant."""
+    return variant_scene(POWER_VARIANT_CONFIGS[wildcards.variant])
 
 
 wildcard_constraints:

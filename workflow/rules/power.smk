@@ -9,7 +9,7 @@
 use rule robustness_participant as power_participant with:
     input:
         config=replicate_config_input,
-        scene=config["scene"],
+        scene=power_scene_input,
         population=OPERATOR_POPULATION,
     output:
         before=temp(directory(REPLICATE / "raw" / "p{p}" / "before")),
@@ -45,7 +45,7 @@ use rule robustness_process as power_process with:
             stage=("before", "after"),
             allow_missing=True,
         ),
-        scene=config["scene"],
+        scene=power_scene_input,
     output:
         trials=REPLICATE / "trials.csv",
         steps=temp(REPLICATE / "steps.csv"),

@@ -14,7 +14,7 @@ ROBUST_BENCHMARKS = BENCHMARKS / "robustness"
 use rule simulated_participant as robustness_participant with:
     input:
         config=variant_config_input,
-        scene=config["scene"],
+        scene=variant_scene_input,
         population=OPERATOR_POPULATION,
     output:
         before=directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before"),
@@ -49,7 +49,7 @@ rule robustness_process:
             p=ROBUST_PARTICIPANTS,
             stage=("before", "after"),
         ),
-        scene=config["scene"],
+        scene=variant_scene_input,
     output:
         trials=ROBUST / "{variant}" / "trials.csv",
         steps=ROBUST / "{variant}" / "steps.csv",
@@ -95,7 +95,7 @@ rule robustness_stats:
 rule robustness_case_study:
     input:
         config=variant_config_input,
-        scene=config["scene"],
+        scene=variant_scene_input,
     output:
         steps=ROBUST / "{variant}" / "case_study" / "steps.csv",
         arbitration=ROBUST / "{variant}" / "case_study" / "arbitration.csv",
