@@ -36,6 +36,7 @@ from casa_core.experiments.robustness import (
     OVERLAY_KEYS,
     RUNNING_BLOCKS,
     settings_text,
+    setup_text,
     variant_config,
     variant_names,
 )
@@ -60,6 +61,7 @@ __all__ = [
     "replicate_seed",
     "replicate_seeds",
     "settings_text",
+    "setup_text",
     "target_units",
     "unit_configs",
     "variant_config",

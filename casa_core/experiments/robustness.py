@@ -19,9 +19,9 @@ Examples
 >>> built["simulation"]["operator"], built["inference"]["preset"]
 ('lookahead', 'casa')
 >>> settings_text(variant_config(config, "original"))
-'preset original, evidence executed, operator predictive'
->>> settings_text(variant_config(config, "authors"))
-'scene scene-original.yaml (teleop original), preset casa, evidence commanded, operator predictive'
+'scene scene.yaml (teleop held), preset original, evidence executed, operator predictive'
+>>> setup_text(variant_config(config, "authors"))
+'scene scene-original.yaml (teleop original)'
 """
 
 from __future__ import annotations
