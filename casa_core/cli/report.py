@@ -118,6 +118,10 @@ def register(commands) -> None:
         "--population",
         help="whom the simulated participants were drawn from, named for a simulated dataset",
     )
+    results.add_argument(
+        "--setup",
+        help="the layout and teleoperation it was simulated on, named for a simulated dataset",
+    )
     results.add_argument("--out", required=True, metavar="MD", help="results.md to write")
     results.add_argument("--out-html", metavar="HTML", help="its HTML page (optional)")
     provenance_options(results)
@@ -208,6 +212,7 @@ def _results(args) -> int:
             dataset=args.dataset,
             operator=args.operator,
             population=args.population,
+            setup=args.setup,
             provenance=built.line() if built else "",
         )
     except (OSError, ValueError) as error:

@@ -133,9 +133,15 @@ ROBUSTNESS_NOTE = (
 
 
 def modelling_note(
-    trials: pd.DataFrame, *, operator: str | None = None, population: str | None = None
+    trials: pd.DataFrame,
+    *,
+    operator: str | None = None,
+    population: str | None = None,
+    setup: str | None = None,
 ) -> str:
     """For a simulated dataset: its modelling choices and where the other choices are judged.
+
+    ``setup`` names the layout and teleoperation it was simulated on, first.
 
     Examples
     --------
@@ -148,7 +154,8 @@ def modelling_note(
     """
     if "simulated" not in _values(trials, "source"):
         return ""
-    choices = [
+    choices = [setup] if setup else []
+    choices += [
         f"preset {', '.join(_values(trials, 'preset')) or 'not recorded'}",
         f"evidence {', '.join(_values(trials, 'evidence')) or 'not recorded'}",
     ]
@@ -166,6 +173,7 @@ def results_markdown(
     dataset: str,
     operator: str | None = None,
     population: str | None = None,
+    setup: str | None = None,
     provenance: str = "",
 ) -> str:
     """The Markdown of ``results.md`` from :func:`casa_core.stats.claims.evaluate_claims`.
@@ -185,6 +193,9 @@ def results_markdown(
     population : str, optional
         Whom the simulated participants were drawn from
         (:func:`casa_core.io.population.population_label`), named beside the operator.
+    setup : str, optional
+        The layout and teleoperation it was simulated on
+        (:func:`casa_core.experiments.robustness.setup_text`), named first.
     provenance : str, optional
         The configuration that built it (:meth:`casa_core.config.Provenance.line`),
         written under the title.
@@ -217,7 +228,9 @@ def results_markdown(
     lines = [f"# Claims of the paper on dataset {dataset}", ""]
     lines += [f"{provenance}.", ""] if provenance else []
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
-    note = modelling_note(tables["trials"], operator=operator, population=population)
+    note = modelling_note(
+        tables["trials"], operator=operator, population=population, setup=setup
+    )
     lines += [note, ""] if note else []
     lines += [
         "Each claim of the paper (C1-C4: what it observed in its expert case study, Sec. "

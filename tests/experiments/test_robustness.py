@@ -416,4 +416,7 @@ def test_a_simulated_datasets_results_md_names_its_choices_and_points_to_the_tab
         text = results_markdown(judged, tables, dataset="d", operator="predictive")
         assert (ROBUSTNESS_NOTE in text) is shown
         assert ("preset casa, evidence commanded, operator model predictive" in text) is shown
+        setup = "scene scene-original.yaml (teleop original)"
+        text = results_markdown(judged, tables, dataset="d", operator="predictive", setup=setup)
+        assert (f"defaults): {setup}, preset casa" in text) is shown
     assert "`snakemake --cores all robustness`" in ROBUSTNESS_NOTE

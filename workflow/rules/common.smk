@@ -223,10 +223,11 @@ def case_study_options(wildcards, input):
 
 
 def operator_option(wildcards):
-    """The operator model of a generated dataset, named in its results.md."""
+    """The setup and operator model of a generated dataset, named in its results.md."""
     if wildcards.ds not in GENERATED:
         return ""
     option = f"--operator {config['simulation']['operator']}"
+    option += f" --setup {shlex.quote(casa_variants.setup_text(config))}"
     if OPERATOR_POPULATION:
         option += f" --population {shlex.quote(population_label(config['simulation']))}"
     return option
