@@ -228,9 +228,7 @@ def results_markdown(
     lines = [f"# Claims of the paper on dataset {dataset}", ""]
     lines += [f"{provenance}.", ""] if provenance else []
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
-    note = modelling_note(
-        tables["trials"], operator=operator, population=population, setup=setup
-    )
+    note = modelling_note(tables["trials"], operator=operator, population=population, setup=setup)
     lines += [note, ""] if note else []
     lines += [
         "Each claim of the paper (C1-C4: what it observed in its expert case study, Sec. "
