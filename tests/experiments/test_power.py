@@ -340,7 +340,11 @@ def test_the_units_of_each_target_and_their_jobs():
     replicate = ("p1_protocol", "p2_protocol", "p3_protocol", "process", "detect")
     variant = ("p1_protocol", "p2_protocol", "process", "stats", "case_study", "claims")
     assert progress.target_units(ci, "power") == {"default/r1": replicate, "default/r2": replicate}
-    assert progress.target_units(ci, "robustness") == {"default": variant, "original": variant}
+    assert progress.target_units(ci, "robustness") == {
+        "default": variant,
+        "original": variant,
+        "authors": variant,
+    }
     with pytest.raises(ValueError, match="no target 'all'"):
         progress.target_units(ci, "all")
 
