@@ -11,6 +11,7 @@ from casa_core.cli._errors import fail
 from casa_core.cli._options import example, positive_int, provenance, provenance_options
 from casa_core.cli.progress import EXAMPLE as PROGRESS_EXAMPLE
 from casa_core.io import read_table
+from casa_core.io.population import CONFIG_POPULATION
 
 _EXAMPLES = {
     "detect": (
@@ -58,7 +59,7 @@ def register(commands) -> None:
     table.add_argument("--detections", required=True, nargs="+", metavar="CSV")
     table.add_argument(
         "--population",
-        default="simulation.population of the config",
+        default=CONFIG_POPULATION,
         help="whom the simulated participants were drawn from, written in each row",
     )
     table.add_argument("--out", required=True, metavar="CSV", help="power.csv to write")

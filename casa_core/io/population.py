@@ -31,6 +31,8 @@ from casa_core.io.atomic import atomic_write_text
 
 FORMAT = "casa-operator-population"
 VERSION = 1
+#: Whom the simulated participants are drawn from when no population file is set.
+CONFIG_POPULATION = "simulation.population of the config"
 LOGNORMAL: tuple[str, ...] = ("reaction_time", "perception_noise", "deadband", "lapse_rate")
 LOGNORMAL += ("lapse_duration", "wrong_key")
 
@@ -147,7 +149,7 @@ def population_label(simulation: Mapping) -> str:
     """
     path = simulation.get("operator_population")
     if path is None:
-        return "simulation.population of the config"
+        return CONFIG_POPULATION
     document = read_population(path)
     return f"{Path(path).name}, fitted by casa calibrate to dataset {document['dataset']}"
 

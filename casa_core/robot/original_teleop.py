@@ -48,10 +48,10 @@ import pybullet as p
 
 from casa_core.fixed_order import matmul
 from casa_core.robot.keys import KEY_DIRECTIONS, check_keys
+from casa_core.robot.sim import TOOL_LINK
 
-#: pybullet's index of link 7 (the last arm link) in casa's URDF; the tool is index 7.
-LINK7 = 6
-TOOL = LINK7 + 1
+#: pybullet's index of link 7 (the last arm link) in casa's URDF, just before the tool's.
+LINK7 = TOOL_LINK - 1
 
 
 class OriginalTeleoperation:
@@ -108,7 +108,7 @@ class OriginalTeleoperation:
             position, _ = self.sim.ee_pose()
             solution = p.calculateInverseKinematics(
                 self.sim.robot,
-                TOOL,
+                TOOL_LINK,
                 (position + velocity[:3] * self.dt).tolist(),
                 physicsClientId=self.sim.client,
             )
@@ -124,7 +124,7 @@ class OriginalTeleoperation:
         zeros = [0.0] * len(command)
         linear, _ = p.calculateJacobian(
             self.sim.robot,
-            TOOL,
+            TOOL_LINK,
             [0.0, 0.0, 0.0],
             self.sim.q.tolist(),
             zeros,
@@ -134,4 +134,4 @@ class OriginalTeleoperation:
         return np.array([*matmul(np.asarray(linear), command), -command[-1]])
 
 
-__all__ = ["LINK7", "TOOL", "OriginalTeleoperation"]
+__all__ = ["LINK7", "OriginalTeleoperation"]

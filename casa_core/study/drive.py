@@ -60,8 +60,7 @@ class OriginalDrive:
 
     def start(self) -> np.ndarray:
         """Put the arm at the scene's start joints (or its start state); return the state."""
-        joints = self.scene.start.joints
-        state = self.sim.reset(self.scene.start_state, q=None if joints is None else joints)
+        state = self.sim.reset(self.scene.start_state, q=self.scene.start.joints)
         self.teleop.reset()
         self._wrist_start = float(self.sim.q[-1])
         return self._with_wrist_turn(state)

@@ -257,11 +257,10 @@ VARIANTS = casa_variants.variant_names(config)
 ROBUST_INTERIM = Path("data/interim/robustness")
 ROBUST = PROCESSED / "robustness"
 ROBUST_PARTICIPANTS = list(range(1, config["robustness"]["participants"] + 1))
+VARIANT_SETTINGS = {name: casa_variants.variant_config(config, name) for name in VARIANTS}
 VARIANT_CONFIGS = {
-    name: effective_config_file(
-        ROBUST_INTERIM / name / "config.yaml", casa_variants.variant_config(config, name)
-    )
-    for name in VARIANTS
+    name: effective_config_file(ROBUST_INTERIM / name / "config.yaml", settings)
+    for name, settings in VARIANT_SETTINGS.items()
 }
 
 
@@ -278,14 +277,9 @@ def variant_config_input(wildcards):
     return VARIANT_CONFIGS[wildcards.variant]
 
 
-def variant_scene(settings):
-    """The scene file of a variant's whole config (the package's where it names none)."""
-    return settings["scene"] or os.path.relpath(DEFAULT_SCENE)
-
-
 def variant_scene_input(wildcards):
     """The scene file of a robustness variant (its overlay may name another setup)."""
-    return variant_scene(casa_variants.variant_config(config, wildcards.variant))
+    return VARIANT_SETTINGS[wildcards.variant]["scene"]
 
 
 def margin_options(wildcards=None):
@@ -328,7 +322,7 @@ def replicate_config_input(wildcards):
 
 def power_scene_input(wildcards):
     """The scene file of a power variant."""
-    return variant_scene(POWER_VARIANT_CONFIGS[wildcards.variant])
+    return POWER_VARIANT_CONFIGS[wildcards.variant]["scene"]
 
 
 wildcard_constraints:
