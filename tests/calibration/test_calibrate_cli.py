@@ -1,10 +1,11 @@
 """`casa calibrate` on datasets: what it writes, and what it refuses.
 
 The recorded dataset is written as `casa teleop` records a person (``source`` human),
-with scripted keys standing in for the person; tests/study/test_session.py runs
-`casa calibrate` on a whole `casa session` recorded in a window. The imported dataset is
-the synthetic original-format session of tests/io/test_import_original.py, imported by
-`casa import original`. Sizes are the smallest that train (30 simulations).
+with scripted keys standing in for the person; the session dataset is what `casa session`
+records (its loop, with tests/study/test_session.py's headless window and scripted keys).
+The imported dataset is the synthetic original-format session of
+tests/io/test_import_original.py, imported by `casa import original`. Sizes are the
+smallest that train (30 simulations).
 """
 
 from __future__ import annotations
@@ -82,6 +83,33 @@ def test_a_recorded_dataset_gives_a_population_a_predictive_table_and_a_figure(c
     assert set(table["task"]) == {"known_goal"} and len(table) == 3 * 6
     assert (table["simulated_low"] <= table["simulated_high"]).all()
     assert calibrated.with_name("population_predictive.png").stat().st_size > 10_000
+
+
+def test_a_dataset_recorded_by_casa_session_gives_a_population(tmp_path):
+    from casa_core.scene import DEFAULT_SCENE
+    from casa_core.study.session_run import STOPPED, run_session
+    from tests.study.test_session import FakeWindow, settings
+
+    def window(scene, *, notify=None):
+        # Practice and four trials, then a stop from the pause screen: all kept.
+        return FakeWindow(scene, script=["start"] * 5 + ["pause", "abort"])
+
+    dataset = tmp_path / "lab"
+    outcome = run_session(
+        load_scene(),
+        "P05",
+        dataset,
+        settings=settings(),
+        scene_source=DEFAULT_SCENE,
+        window_factory=window,
+    )
+    assert outcome == STOPPED and len(list((dataset / "P05").glob("*.json"))) == 5
+    out = tmp_path / "session.json"
+    assert main(["calibrate", str(dataset), "--out", str(out), *SMALL]) == 0
+    assert read_population(out)["dataset"] == "lab"
+    table = pd.read_csv(out.with_name("session_predictive.csv"), keep_default_na=False)
+    assert len(table) > 0 and (table["people_trials"] >= 1).all()
+    assert out.with_name("session_predictive.png").stat().st_size > 10_000
 
 
 def test_the_trial_after_learning_is_left_out_with_a_warning(recorded, tmp_path, capsys):
