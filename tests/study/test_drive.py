@@ -79,6 +79,32 @@ def test_each_goal_task_end_is_reached_by_keys_alone_in_a_no_assistance_trial(ta
     assert (np.abs(link7[-1] - link7[0]) <= 0.0025 * (len(frame) - 1) + 0.005).all()
 
 
+class PourAt(TowardGoal):
+    """Toward the pouring pose, then rot+ until the wrist has turned to the pouring tilt."""
+
+    def __init__(self, pouring):
+        super().__init__(pouring.position)
+        self.tilt = pouring.tilt
+        self.there = False
+
+    def keys(self, t, state):
+        if not self.there:
+            self.there = np.linalg.norm(self.goal - state[:3]) < 0.02
+            if not self.there:
+                return super().keys(t, state)
+        if state[3] < self.tilt - 0.0125:
+            return frozenset({"rot+"})
+        self.done = True
+        return frozenset()
+
+
+def test_the_pour_is_reached_by_keys_alone_in_a_no_assistance_trial():
+    source = PourAt(ORIGINAL_SCENE.pouring)
+    frame = run_trial(ORIGINAL_SCENE, "unknown_skill", "NA", source, participant="p").frame
+    assert source.there and source.done
+    assert task_success(executed(frame), intended_trajectory("unknown_skill", ORIGINAL_SCENE))
+
+
 def test_without_assistance_the_arm_gets_the_described_joint_command(monkeypatch):
     script = [{"x+"}] * 10 + [{"y-", "z+"}] * 8 + [set()] * 3 + [{"rot+", "x-"}] * 6
     script += [{"z-", "y+"}] * 12
