@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from casa_core.vocabulary import TELEOP_MODES
+from casa_core.vocabulary import POINTS, TASKS, TELEOP_MODES
 
 #: The scene the package is set up with: ``config/scene.yaml`` of the repository. A path
 #: given by a user is resolved against the working directory instead.
@@ -90,16 +90,27 @@ class Scene:
         Goal positions by name (read-only); at least ``green``, ``purple`` and ``red``.
     pouring : Pouring
     teleop : Teleop
-    link7_goals : Mapping[str, tuple of 3 floats]
-        Optional: the link-7 origins of goals (the original implementation's end
-        effector), for inference that measures at link 7; empty when not given.
+    point : str
+        The point of the arm whose position the state is, and of which the start, the goals
+        and the pouring pose are positions (:data:`~casa_core.vocabulary.POINTS`):
+        ``tool``, the tool point (default), or ``link7``, the origin of link 7 (the
+        original implementation's end effector, 0.16 m before the tool point).
+    goals_elsewhere : Mapping[str, Mapping[str, tuple of 3 floats]]
+        Optional: the same goals at the other point, by point (the file's section named
+        for it), for a replay that measures the arm there; empty when not given.
+    via : Mapping[str, tuple of (3 floats)]
+        Optional: by task, the positions its intended path passes through, in order,
+        between the start and the task's end (:func:`casa_core.assist.tasks.task_waypoints`);
+        a task not named goes straight.
     """
 
     start: Start
     goals: MappingProxyType
     pouring: Pouring
     teleop: Teleop
-    link7_goals: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    point: str = POINTS[0]
+    goals_elsewhere: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    via: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
     @property
     def start_state(self) -> np.ndarray:
@@ -120,17 +131,20 @@ class Scene:
             raise SceneError(f"teleop mode {mode!r}: expected one of {', '.join(TELEOP_MODES)}")
         return dataclasses.replace(self, teleop=dataclasses.replace(self.teleop, mode=mode))
 
-    def goal(self, name: str, point: str = "tool") -> np.ndarray:
-        """The position of goal ``name`` at ``point`` (``"tool"`` or ``"link7"``).
+    def goal(self, name: str, point: str | None = None) -> np.ndarray:
+        """The position of goal ``name`` at ``point`` (``"tool"`` or ``"link7"``; default
+        the scene's :attr:`point`).
 
         Raises
         ------
         SceneError
             Naming the goals the scene has at that point.
         """
-        goals = self.goals if point == "tool" else self.link7_goals
+        if point is None or point == self.point:
+            goals, key = self.goals, "goals"
+        else:
+            goals, key = self.goals_elsewhere.get(point, {}), point
         if name not in goals:
-            key = "goals" if point == "tool" else "link7"
             raise SceneError(f"scene: {key} has no {name!r}; it has {', '.join(goals) or 'none'}")
         return np.array(goals[name], dtype=float)
 
@@ -138,8 +152,17 @@ class Scene:
     def from_dict(cls, data: Any, source: str = "scene") -> Scene:
         """Validate a parsed scene file; ``source`` names it in errors."""
         reader = _Reader(source)
-        top = reader.mapping(data, "", ("start", "goals", "pouring", "teleop"), ("link7",))
+        top = reader.mapping(
+            data, "", ("start", "goals", "pouring", "teleop"), ("point", *POINTS, "via")
+        )
+        point = top.get("point", POINTS[0])
+        if point not in POINTS:
+            reader.fail("point", f"must be one of {', '.join(POINTS)}, got {point!r}")
+        if point in top:
+            reader.fail(point, f"the scene's own point ({point}): its goals go in goals")
         start = reader.mapping(top["start"], "start", ("position", "rot"), ("joints",))
+        if point != POINTS[0] and "joints" not in start:
+            reader.fail("start.joints", f"required at point {point}: the arm starts at its joints")
         goals = reader.mapping(top["goals"], "goals", None)
         missing = [name for name in REQUIRED_GOALS if name not in goals]
         if missing:
@@ -151,10 +174,14 @@ class Scene:
         mode = teleop.get("mode", "held")
         if mode not in TELEOP_MODES:
             reader.fail("teleop.mode", f"must be one of {', '.join(TELEOP_MODES)}, got {mode!r}")
-        link7 = reader.mapping(top.get("link7", {}), "link7", None)
-        for name in link7:
-            if name not in goals:
-                reader.fail(f"link7.{name}", f"not a goal of the scene ({', '.join(goals)})")
+        via = reader.mapping(top.get("via", {}), "via", (), TASKS)
+        elsewhere = {
+            other: reader.mapping(top[other], other, None) for other in POINTS if other in top
+        }
+        for other, named in elsewhere.items():
+            for name in named:
+                if name not in goals:
+                    reader.fail(f"{other}.{name}", f"not a goal of the scene ({', '.join(goals)})")
         return cls(
             start=Start(
                 reader.vector(start, "start.position"),
@@ -175,8 +202,15 @@ class Scene:
                 reader.number(teleop, "teleop.dt", positive=True),
                 mode,
             ),
-            link7_goals=MappingProxyType(
-                {str(name): reader.vector(link7, f"link7.{name}") for name in link7}
+            point=point,
+            via=MappingProxyType({task: reader.path(via, f"via.{task}") for task in via}),
+            goals_elsewhere=MappingProxyType(
+                {
+                    other: MappingProxyType(
+                        {str(name): reader.vector(named, f"{other}.{name}") for name in named}
+                    )
+                    for other, named in elsewhere.items()
+                }
             ),
         )
 
@@ -255,6 +289,14 @@ class _Reader:
         """Seven joint angles given in degrees (the original's convention), in radians."""
         degrees = self.numbers(node, key, 7, "joint angles in degrees")
         return tuple(math.radians(v) for v in degrees)
+
+    def path(self, node: dict, key: str) -> tuple[tuple[float, float, float], ...]:
+        """A non-empty list of positions ``[x, y, z]``; an error names ``key.<index>``."""
+        value = node[key.rsplit(".", 1)[-1]]
+        if not isinstance(value, list) or not value:
+            self.fail(key, f"must be a list of positions [x, y, z], got {value!r}")
+        positions = {str(index): position for index, position in enumerate(value)}
+        return tuple(self.vector(positions, f"{key}.{index}") for index in positions)
 
     def vector(self, node: dict, key: str) -> tuple[float, float, float]:
         x, y, z = self.numbers(node, key, 3, "numbers [x, y, z]")

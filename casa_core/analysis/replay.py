@@ -52,9 +52,9 @@ from casa_core.assist.presets import DEFECTS, Preset
 from casa_core.defaults import DT, EPSILON, HORIZON
 from casa_core.io.contract import INTENT_PREFIXES, INTENT_SUFFIX, JOINTS
 from casa_core.robot.keys import keys_to_action, parse_keys
-from casa_core.robot.kinematics import link7_position
+from casa_core.robot.kinematics import point_position
 from casa_core.scene import KNOWN_GOALS, Scene, SceneError
-from casa_core.vocabulary import DEFECTS_PRESET, POINTS
+from casa_core.vocabulary import DEFECTS_PRESET
 
 #: The columns of a replay table, in order.
 COLUMNS = ("t", "intent", "suboptimality", "beta", "belief", "theta_star", "alpha", "misspecified")
@@ -135,14 +135,14 @@ def resolve_intents(
     chosen: Preset,
     learned: Sequence = (),
     *,
-    point: str = POINTS[0],
+    point: str | None = None,
 ) -> list[Intent]:
     """The intents called ``names``: goals of the scene, else learned intents by name.
 
-    A goal's cost is the preset's, its position the scene's at ``point`` (a scene that
-    does not give it there is a ReplayError). ``learned`` holds casa-intent files (the file of
-    intent NAME is ``NAME.intent.json``, read only when NAME is needed, a fresh intent
-    each time) or intents already built.
+    A goal's cost is the preset's, its position the scene's at ``point`` (default the
+    scene's own point; a scene that does not give it there is a ReplayError).
+    ``learned`` holds casa-intent files (the file of intent NAME is ``NAME.intent.json``,
+    read only when NAME is needed, a fresh intent each time) or intents already built.
 
     Raises
     ------
@@ -225,8 +225,9 @@ def replay_trial(
         :data:`~casa_core.vocabulary.DEFECTS_PRESET` redoes the original's numerics with
         their defects (:mod:`casa_core.analysis.original_numerics`) over the scene's goals.
     point : {"tool", "link7"}, optional
-        Where the arm is measured (:func:`trial_point`): the logged tool point, or link 7
-        from the logged joint angles, with the scene's link-7 goals.
+        Where the arm is measured (:func:`trial_point`), with the scene's goals at that
+        point: the log's positions where they were measured there (the scene's
+        ``point``), else that point of the logged joint angles.
     lam : float, optional
         Rate of the prior on beta; default the preset's.
     epsilon : float, default EPSILON
@@ -260,7 +261,7 @@ def replay_trial(
     if per_step < 1 or abs(per_step * teleop.dt - DT) > 1e-9:
         raise ReplayError(f"scene: teleop.dt = {teleop.dt} s does not divide {DT} s")
     t = frame["t"].to_numpy(dtype=float)
-    states = _measured_states(frame, point)
+    states = _measured_states(frame, point, scene.point)
     # The tick of each row (t = tick * dt); inference runs at each multiple of per_step.
     ticks = np.rint(t / teleop.dt).astype(int)
     if chosen is DEFECTS:
@@ -314,15 +315,16 @@ def replay_trial(
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
 
-def _measured_states(frame: pd.DataFrame, point: str) -> np.ndarray:
-    """The states ``[x, y, z, rot]`` at ``point``: the log's, or link 7 of its joint angles."""
+def _measured_states(frame: pd.DataFrame, point: str, logged: str) -> np.ndarray:
+    """The states ``[x, y, z, rot]`` at ``point``: the log's where it was ``logged`` there
+    (the scene's point), else ``point`` of its joint angles."""
     states = frame[["x", "y", "z", "rot"]].to_numpy(dtype=float, copy=True)
-    if point == "link7":
+    if point != logged:
         missing = [name for name in JOINTS if name not in frame.columns]
         if missing:
-            raise ReplayError(f"measured at link7: the log has no joint angles ({missing[0]})")
+            raise ReplayError(f"measured at {point}: the log has no joint angles ({missing[0]})")
         q = frame[list(JOINTS)].to_numpy(dtype=float)
-        states[:, :3] = [link7_position(row) for row in q]
+        states[:, :3] = [point_position(row, point) for row in q]
     return states
 
 
@@ -337,7 +339,7 @@ def _defect_goals(scene: Scene, names: list[str], point: str) -> np.ndarray:
     return np.array([_goal_at(scene, name, point) for name in names])
 
 
-def _goal_at(scene: Scene, name: str, point: str) -> np.ndarray:
+def _goal_at(scene: Scene, name: str, point: str | None) -> np.ndarray:
     """Goal ``name``'s position at ``point``; ReplayError when the scene does not give it."""
     try:
         return scene.goal(name, point)

@@ -2,7 +2,9 @@
 
 A task's *intended trajectory* is the exemplary reference shown to participants
 before each task (paper, Sec. V-A): straight Cartesian segments driven at the
-teleoperation speed, then, for pouring, the cup tilted at the rotation speed.
+teleoperation speed, then, for pouring, the cup tilted at the rotation speed. The
+segments run from the start through the positions the scene's ``via`` names for the task
+(none by default) to the task's end.
 It is the reference of the error metric and the path simulated participants follow.
 """
 
@@ -30,17 +32,20 @@ def task_waypoints(task: str, scene: Scene) -> np.ndarray:
     >>> task_waypoints("familiarization", load_scene())[-1].tolist()  # the purple goal
     [0.22, -0.4, 0.18, 0.0]
     """
+    if task not in TASKS:
+        raise ValueError(f"unknown task {task!r}; expected one of {', '.join(TASKS)}")
     start = scene.start_state
+    passing = [[*position, start[3]] for position in scene.via.get(task, ())]
     if task == "familiarization":
-        return np.array([start, [*scene.goals[PRACTICE_GOAL], 0.0]])
-    if task == "known_goal":
-        return np.array([start, [*scene.goals["green"], 0.0]])
-    if task == "unknown_goal":
-        return np.array([start, [*scene.goals["red"], 0.0]])
-    if task == "unknown_skill":
+        ends = [[*scene.goals[PRACTICE_GOAL], 0.0]]
+    elif task == "known_goal":
+        ends = [[*scene.goals["green"], 0.0]]
+    elif task == "unknown_goal":
+        ends = [[*scene.goals["red"], 0.0]]
+    else:
         pour = scene.pouring.position
-        return np.array([start, [*pour, 0.0], [*pour, scene.pouring.tilt]])
-    raise ValueError(f"unknown task {task!r}; expected one of {', '.join(TASKS)}")
+        ends = [[*pour, 0.0], [*pour, scene.pouring.tilt]]
+    return np.array([start, *passing, *ends])
 
 
 def intended_trajectory(task: str, scene: Scene, dt: float | None = None) -> np.ndarray:

@@ -14,7 +14,7 @@ Examples
 >>> from casa_core.config import DEFAULT_CONFIG, load_config
 >>> config = load_config(DEFAULT_CONFIG)
 >>> variant_names(config)
-['default', 'original', 'paper', 'executed', 'lookahead', 'authors']
+['default', 'original', 'paper', 'executed', 'lookahead', 'authors', 'authors_via_green']
 >>> built = variant_config(config, "lookahead")
 >>> built["simulation"]["operator"], built["inference"]["preset"]
 ('lookahead', 'casa')

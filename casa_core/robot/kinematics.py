@@ -161,10 +161,28 @@ def link7_position(q) -> np.ndarray:
     return link_frames(q)[6][:3, 3].copy()
 
 
-def jacobian(q) -> np.ndarray:
-    """Geometric Jacobian ``(6, 7)`` of the tool: rows ``[v; omega]`` in the base frame."""
+#: The entry of :func:`link_frames` of each point the arm may be measured at
+#: (:data:`~casa_core.vocabulary.POINTS`): the tool point, or the link-7 origin.
+POINT_FRAMES = {"tool": 7, "link7": 6}
+
+
+def point_position(q, point: str = "tool") -> np.ndarray:
+    """Position ``(3,)`` of ``point`` (``"tool"`` or ``"link7"``) at joint angles ``q``.
+
+    Examples
+    --------
+    >>> start = np.radians([180, 175, 180, 300, 180, 180, 190])
+    >>> bool(np.array_equal(point_position(start, "link7"), link7_position(start)))
+    True
+    """
+    return link_frames(q)[POINT_FRAMES[point]][:3, 3].copy()
+
+
+def jacobian(q, point: str = "tool") -> np.ndarray:
+    """Geometric Jacobian ``(6, 7)`` of ``point`` (default the tool): rows ``[v; omega]`` in
+    the base frame."""
     frames = link_frames(q)
-    tip = frames[7][:3, 3]
+    tip = frames[POINT_FRAMES[point]][:3, 3]
     axes = frames[:7, :3, 2]
     origins = frames[:7, :3, 3]
     return np.vstack([np.cross(axes, tip - origins).T, axes.T])

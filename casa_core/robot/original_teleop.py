@@ -21,9 +21,11 @@ on link 7 where the arm is.
 
 Shared autonomy blends in joint space, as the original does: :meth:`~OriginalTeleoperation.follow`
 turns the robot's Cartesian action u* into joint velocities the same way (position-only
-inverse kinematics, of the tool point, whose velocity u* is), and
-:meth:`~OriginalTeleoperation.tool_velocity` says what a joint command does to the state
-``[x, y, z, rot]``, the user's action T(a) that inference observes. The speeds are the
+inverse kinematics of the scene's point, whose velocity u* is), and
+:meth:`~OriginalTeleoperation.state_velocity` says what a joint command does to the state
+``[x, y, z, rot]``, the user's action T(a) that inference observes. On the authors' layout
+the scene's point is link 7 (``point: link7``), so keys, u* and the state all move the
+original's end effector. The speeds are the
 scene's ``teleop`` ones (the original's). The other teleoperation, which holds the orientation, is
 :meth:`casa_core.robot.sim.ArmSimulation.step` with :func:`casa_core.robot.keys.keys_to_action`.
 
@@ -98,33 +100,32 @@ class OriginalTeleoperation:
         return command
 
     def follow(self, velocity) -> np.ndarray:
-        """Joint velocities ``(7,)`` that move the tool point at ``velocity`` =
-        ``[vx, vy, vz, vrot]`` for one tick: position-only inverse kinematics of the tool
-        point moved by ``v * dt``, and ``vrot`` on joint 7 (backwards, as ``rot+``). The
-        target is not touched."""
+        """Joint velocities ``(7,)`` that move the scene's point (the state's position) at
+        ``velocity`` = ``[vx, vy, vz, vrot]`` for one tick: position-only inverse kinematics
+        of the point moved by ``v * dt``, and ``vrot`` on joint 7 (backwards, as ``rot+``).
+        The target is not touched."""
         velocity = np.asarray(velocity, dtype=float)
         command = np.zeros(len(self.sim.q))
         if np.any(velocity[:3]):
-            position, _ = self.sim.ee_pose()
             solution = p.calculateInverseKinematics(
                 self.sim.robot,
-                TOOL_LINK,
-                (position + velocity[:3] * self.dt).tolist(),
+                self.sim.point_link,
+                (self.sim.state[:3] + velocity[:3] * self.dt).tolist(),
                 physicsClientId=self.sim.client,
             )
             command = (np.asarray(solution[: len(command)]) - self.sim.q) / self.dt
         command[-1] -= velocity[3]
         return command
 
-    def tool_velocity(self, command) -> np.ndarray:
-        """``[vx, vy, vz, vrot]`` of joint velocities ``command``: the tool point's velocity
-        through pybullet's Jacobian at the current joints, and joint 7's turn (backwards
-        positive, as ``rot+``)."""
+    def state_velocity(self, command) -> np.ndarray:
+        """``[vx, vy, vz, vrot]`` of joint velocities ``command``: the velocity of the
+        scene's point through pybullet's Jacobian at the current joints, and joint 7's turn
+        (backwards positive, as ``rot+``)."""
         command = np.asarray(command, dtype=float)
         zeros = [0.0] * len(command)
         linear, _ = p.calculateJacobian(
             self.sim.robot,
-            TOOL_LINK,
+            self.sim.point_link,
             [0.0, 0.0, 0.0],
             self.sim.q.tolist(),
             zeros,

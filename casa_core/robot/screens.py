@@ -197,7 +197,7 @@ class SessionWindow:
 
     def instructions(self, title: str, body: str, task: str) -> str:
         """The next trial's instructions; ``"start"`` on Enter, ``"pause"`` on P."""
-        self.sim.reset(self.scene.start_state)
+        self.sim.reset_to_start()
         self.clear()
         self.highlight(task)
         top = self.write(title, 0, size=2.0)

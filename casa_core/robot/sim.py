@@ -40,6 +40,9 @@ from casa_core.scene import Scene
 URDF_PATH = Path(str(files("casa_core.robot").joinpath("j2s7s300.urdf")))
 
 TOOL_LINK = 7
+#: pybullet's link of each point a scene may measure the arm at (``Scene.point``): the tool
+#: point, or the origin of link 7 (the last arm link, just before the tool's).
+POINT_LINKS = {"tool": TOOL_LINK, "link7": TOOL_LINK - 1}
 ARM_JOINTS = list(range(kin.N_JOINTS))
 
 
@@ -98,10 +101,11 @@ class ArmSimulation:
 
     Notes
     -----
-    The state the rest of the code sees is ``[x, y, z, rot]``: the tool position in the
+    The state the rest of the code sees is ``[x, y, z, rot]``: the position of the scene's
+    point (``scene.point``: the tool point, or link 7's origin; :data:`POINT_LINKS`) in the
     robot base frame (m) and the angle of the last joint's turn (rad), unwrapped so that
-    it grows past pi when a participant keeps rotating. Use as a context manager or call
-    :meth:`close`.
+    it grows past pi when a participant keeps rotating. The Cartesian controller moves that
+    point. Use as a context manager or call :meth:`close`.
     """
 
     def __init__(
@@ -117,6 +121,7 @@ class ArmSimulation:
             settings = ControllerSettings(dt=scene.teleop.dt)
         self.settings = settings
         self.scene = scene
+        self.point_link = POINT_LINKS[scene.point]
         self.gui = gui
         if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
             # pybullet's window needs X11 and would end the whole process without one.
@@ -144,8 +149,9 @@ class ArmSimulation:
         self._state = np.zeros(4)
         self._reference = np.zeros(4)
         if start_q is None:
-            start_q = scene.start.joints  # a start given as joint angles, where it is
-        self.reset(scene.start_state, q=start_q)
+            self.reset_to_start()
+        else:
+            self.reset(scene.start_state, q=start_q)
 
     # -- lifecycle ---------------------------------------------------------------------
     def close(self) -> None:
@@ -192,18 +198,38 @@ class ArmSimulation:
         link = p.getLinkState(
             self.robot, TOOL_LINK, computeForwardKinematics=True, physicsClientId=self.client
         )
+        position = link[4]
+        if self.point_link != TOOL_LINK:
+            position = p.getLinkState(
+                self.robot,
+                self.point_link,
+                computeForwardKinematics=True,
+                physicsClientId=self.client,
+            )[4]
         # One compiled call: the rotation matrix and rot, unwrapped from the last reading.
         self._state, self._rotation = _read_pose(
-            link[4], p.getMatrixFromQuaternion(link[5]), float(self._state[3])
+            position, p.getMatrixFromQuaternion(link[5]), float(self._state[3])
         )
 
+    def reset_to_start(self) -> np.ndarray:
+        """Put the arm at the scene's start: its joint angles where the scene gives them
+        (``start.joints``), else the inverse kinematics of its start state. Returns the
+        state read back."""
+        return self.reset(self.scene.start_state, q=self.scene.start.joints)
+
     def reset(self, state, q=None) -> np.ndarray:
-        """Put the arm at ``state`` = ``[x, y, z, rot]`` (by inverse kinematics) or at ``q``.
+        """Put the arm at ``state`` = ``[x, y, z, rot]`` (by inverse kinematics of the tool
+        point) or at ``q``, which a scene measured at another point must give.
 
         Returns the state read back from pybullet.
         """
         state = np.asarray(state, dtype=float)
         if q is None:
+            if self.point_link != TOOL_LINK:
+                raise ValueError(
+                    f"a scene measured at {self.scene.point} starts the arm at joint angles "
+                    "(start.joints), not by inverse kinematics of the tool point"
+                )
             q = kin.inverse_kinematics(state[:3], state[3])
         for joint, angle in zip(ARM_JOINTS, q, strict=True):
             p.resetJointState(self.robot, joint, angle, 0.0, physicsClientId=self.client)
@@ -228,7 +254,7 @@ class ArmSimulation:
         if action.shape == (4,):
             linear, angular = p.calculateJacobian(
                 self.robot,
-                TOOL_LINK,
+                self.point_link,
                 [0.0, 0.0, 0.0],
                 self._q.tolist(),
                 self._zeros,

@@ -118,7 +118,15 @@ class AssistLoop:
         self.assistant = trial_assistant(scene, method, intents, inference)
         self.ticks_per_inference = inference_ticks(scene)
         self.meta = trial_meta(
-            participant, task, method, phase, "human", self.assistant, inference, max_duration
+            participant,
+            task,
+            method,
+            phase,
+            "human",
+            self.assistant,
+            inference,
+            max_duration,
+            point=scene.point,
         )
         self.model = ArmSimulation(scene)
         self.log = log or (lambda text: None)

@@ -36,7 +36,7 @@ from casa_core.scene import KNOWN_GOALS, Scene
 from casa_core.study.drive import scene_drive
 from casa_core.study.key_sources import KeySource
 from casa_core.vocabulary import METHOD_ARBITRATION as LOGGED_ARBITRATION
-from casa_core.vocabulary import METHODS, TASK_PHASES
+from casa_core.vocabulary import METHODS, POINTS, TASK_PHASES
 
 #: Every method's arbitration, and BELIEF's (the arbitration analysis only).
 METHOD_ARBITRATION = {**LOGGED_ARBITRATION, "BELIEF": "belief"}
@@ -193,7 +193,15 @@ def run_trial(
         if own_sim:
             sim.close()
     meta = trial_meta(
-        participant, task, method, phase, source_kind, assistant, inference, max_duration
+        participant,
+        task,
+        method,
+        phase,
+        source_kind,
+        assistant,
+        inference,
+        max_duration,
+        point=scene.point,
     )
     if seed is not None:
         meta["seed"] = int(seed)
@@ -241,8 +249,11 @@ def trial_meta(
     assistant: Assistant,
     inference: Preset,
     max_duration: float,
+    *,
+    point: str = POINTS[0],
 ) -> dict:
-    """A trial's casa-trial/1 metadata, what inference assumed included."""
+    """A trial's casa-trial/1 metadata, what inference assumed included: ``point`` is
+    where the arm was measured (the scene's), written when it is not the tool point."""
     meta = {
         "participant": str(participant),
         "task": task,
@@ -253,7 +264,10 @@ def trial_meta(
         "max_duration": float(max_duration),  # so a reader can tell a trial that ran out
     }
     # What inference assumed, so that a replay can redo it (casa_core.analysis.replay).
-    meta["inference"] = {"preset": inference.name, "evidence": assistant.evidence}
+    measured: dict[str, str] = {"preset": inference.name, "evidence": assistant.evidence}
+    if point != POINTS[0]:
+        measured["point"] = point
+    meta["inference"] = measured
     return meta
 
 

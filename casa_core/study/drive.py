@@ -10,13 +10,14 @@ The scene's ``teleop.mode`` (:data:`casa_core.vocabulary.TELEOP_MODES`) chooses:
   implementation (:class:`casa_core.robot.original_teleop.OriginalTeleoperation`). The
   robot's u* becomes joint velocities the same way, and the two are blended in joint
   space, ``alpha q_user + (1 - alpha) q_robot``, as the original blends. Inference observes
-  the tool-point velocity of the user's joint command as T(a). The state's ``rot`` is the
+  the velocity of the user's joint command at the scene's point (the state's position:
+  link 7 on the authors' layout, ``point: link7``) as T(a). The state's ``rot`` is the
   wrist turn: the scene's start ``rot`` plus joint 7's turn (backwards positive, as
   ``rot+``) since the start, since the tool's orientation no longer tells it.
 
-Both start the arm at the scene's start: ``original`` at its joint angles where the scene
-gives them (``start.joints``), ``held`` at the inverse kinematics of its position with the
-held orientation.
+Both start the arm at the scene's start (:meth:`ArmSimulation.reset_to_start`): at its
+joint angles where the scene gives them (``start.joints``), else at the inverse kinematics
+of its position with the held orientation.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ class HeldDrive:
 
     def start(self) -> np.ndarray:
         """Put the arm at the scene's start; return the state read back."""
-        return self.sim.reset(self.scene.start_state)
+        return self.sim.reset_to_start()
 
     def tick(self, assistant: Assistant, state, held, elapsed_in_step: float) -> np.ndarray:
         """Drive one tick with the held keys and the assistant's blend; return the new state."""
@@ -60,7 +61,7 @@ class OriginalDrive:
 
     def start(self) -> np.ndarray:
         """Put the arm at the scene's start joints (or its start state); return the state."""
-        state = self.sim.reset(self.scene.start_state, q=self.scene.start.joints)
+        state = self.sim.reset_to_start()
         self.teleop.reset()
         self._wrist_start = float(self.sim.q[-1])
         return self._with_wrist_turn(state)
@@ -74,14 +75,15 @@ class OriginalDrive:
     def tick(self, assistant: Assistant, state, held, elapsed_in_step: float) -> np.ndarray:
         """Drive one tick; return the new state.
 
-        The user's joint command is recorded by the assistant as its tool-point velocity
-        (the evidence of inference). While the user has full authority the arm gets that
-        command alone, exactly the original's; otherwise the blend with the robot's u* in
-        joint space, after which the keys' target is put back on link 7, so that the next
-        key moves on from where the assisted arm is instead of pulling it back.
+        The user's joint command is recorded by the assistant as its velocity at the
+        scene's point (the evidence of inference). While the user has full authority the
+        arm gets that command alone, exactly the original's; otherwise the blend with the
+        robot's u* in joint space, after which the keys' target is put back on link 7, so
+        that the next key moves on from where the assisted arm is instead of pulling it
+        back.
         """
         user_joints = self.teleop.joint_command(held)
-        user_action = self.teleop.tool_velocity(user_joints)
+        user_action = self.teleop.state_velocity(user_joints)
         assistant.act(state, user_action, elapsed_in_step=elapsed_in_step)
         alpha = 1.0 if assistant.latest is None else assistant.latest.alpha
         if alpha >= 1.0:

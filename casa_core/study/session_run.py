@@ -205,7 +205,7 @@ class _Runner:
             self.window.message(*texts.GETTING_READY, "getting-ready", 0.0)
             learned = self.record.learned_files()
             intents = trial_intents(self.scene, learned, inference=self.settings.inference)
-            start = self.window.sim.reset(self.scene.start_state)
+            start = self.window.sim.reset_to_start()
             for intent in intents:
                 intent.cost_to_go(start, HORIZON)  # the assistant's default
             self._after = intents

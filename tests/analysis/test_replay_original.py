@@ -139,8 +139,8 @@ def test_at_the_tool_point_the_same_replay_differs(imported):
 def test_link7_needs_joint_angles_and_link7_goals(imported):
     out, _ = imported
     meta, frame = read_trial(out / "P01" / "task1c")
-    with pytest.raises(ReplayError, match=r"measured at link7: the log has no joint angles \(q1\)"):
-        replay_trial(meta, frame.drop(columns=["q1"]), SCENE)
+    with pytest.raises(ReplayError, match=r"measured at tool: the log has no joint angles \(q1\)"):
+        replay_trial(meta, frame.drop(columns=["q1"]), SCENE, point="tool")
     with pytest.raises(ReplayError, match="measured at link7: scene: link7 has no 'green'"):
         replay_trial(meta, frame, load_scene(), preset="original")
     with pytest.raises(ReplayError, match="preset original_defects redoes goals only"):

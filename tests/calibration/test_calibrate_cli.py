@@ -3,9 +3,11 @@
 The recorded dataset is written as `casa teleop` records a person (``source`` human),
 with scripted keys standing in for the person; the session dataset is what `casa session`
 records (its loop, with tests/study/test_session.py's headless window and scripted keys).
-The imported dataset is the synthetic original-format session of
-tests/io/test_import_original.py, imported by `casa import original`. Sizes are the
-smallest that train (30 simulations).
+Two datasets are imported by `casa import original`: the synthetic original-format
+sessions of tests/io/test_import_original.py (faster than keys allow, so refused), and
+original-format sessions written from simulated operators' trials on the authors' layout,
+driven the original's way (tests/io/original_reference.py's ``session_of_trial``). Sizes
+are the smallest that train (30 simulations).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import pytest
 
 from casa_core.cli import main
 from casa_core.config import load_config
+from casa_core.io import read_trial
 from casa_core.io.population import PopulationFileError, read_population
 from casa_core.scene import load_scene
 from casa_core.study.settings import StudySettings
@@ -36,6 +39,55 @@ def imported(tmp_path_factory):
     out = root / "raw" / "original"
     assert main(["import", "original", str(folder), "--out", str(out)]) == 0
     return out
+
+
+@pytest.fixture(scope="module")
+def imported_operators(tmp_path_factory):
+    """Known Goal under NA, PBA and CASA by a simulated operator on the authors' layout
+    (measured at link 7, the original's teleoperation), written as the original's session
+    files task1a, task1b and task1c, then imported."""
+    import numpy as np
+
+    from casa_core.assist.tasks import intended_trajectory
+    from casa_core.io.original.importer import ORIGINAL_SCENE
+    from casa_core.study.closed_loop import run_trial
+    from casa_core.study.participants import ParticipantParams, make_participant
+    from tests.io.original_reference import session_of_trial
+
+    root = tmp_path_factory.mktemp("operators")
+    scene = load_scene(ORIGINAL_SCENE)
+    params = ParticipantParams(0.35, 0.01, 0.015, 0.03, 0.8, 0.02, 2)
+    reference = intended_trajectory("known_goal", scene)
+    folder = root / "sessions" / "P07"
+    folder.mkdir(parents=True)
+    for letter, method in zip("abc", ("NA", "PBA", "CASA"), strict=True):
+        rng = np.random.default_rng([7, ord(letter)])
+        source = make_participant(params, reference, rng=rng, operator="predictive")
+        result = run_trial(
+            scene, "known_goal", method, source, participant="P07", max_duration=15.0, seed=7
+        )
+        arrays = session_of_trial(result.frame, ["green", "purple"])
+        np.savez(folder / f"task1{letter}_data.npz", **arrays)
+    out = root / "raw" / "authors"
+    assert main(["import", "original", str(folder), "--out", str(out)]) == 0
+    return out, result.frame
+
+
+def test_an_imported_dataset_of_the_authors_setup_gives_a_population(imported_operators, tmp_path):
+    raw, casa_trial = imported_operators
+    meta, frame = read_trial(raw / "P07" / "task1c")
+    # The import gives back what the operator did: its keys and its link-7 path.
+    assert frame["keys"].tolist() == casa_trial["keys"].tolist()
+    path = ["x", "y", "z"]
+    assert abs(frame[path].to_numpy() - casa_trial[path].to_numpy()).max() < 1e-6
+    assert meta["inference"]["point"] == "link7"
+    out = tmp_path / "authors.json"
+    assert main(["calibrate", str(raw), "--out", str(out), *SMALL]) == 0
+    assert read_population(out)["dataset"] == "authors"
+    table = pd.read_csv(out.with_name("authors_predictive.csv"), keep_default_na=False)
+    assert sorted(set(table["method"])) == ["CASA", "NA", "PBA"]
+    assert set(table["task"]) == {"known_goal"} and (table["people_trials"] == 1).all()
+    assert out.with_name("authors_predictive.png").stat().st_size > 10_000
 
 
 @pytest.fixture(scope="module")

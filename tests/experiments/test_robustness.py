@@ -85,7 +85,15 @@ def test_the_variants_to_run_must_be_defined(tmp_path):
 def test_a_variant_changes_only_its_overlay_and_keeps_the_seeds():
     study = load_config(CONFIG)
     names = variants.variant_names(study)
-    assert names == ["default", "original", "paper", "executed", "lookahead", "authors"]
+    assert names == [
+        "default",
+        "original",
+        "paper",
+        "executed",
+        "lookahead",
+        "authors",
+        "authors_via_green",
+    ]
     for name in names:
         built = variants.variant_config(study, name)
         overlay = study["robustness"]["variants"][name]

@@ -122,3 +122,39 @@ def histories(waypoints, goals, *, defects: bool, method: str) -> dict:
         rows["belief"].append(used)
         rows["alpha"].append(share)
     return {key: np.array(value, dtype=float) for key, value in rows.items()}
+
+
+def session_of_trial(frame, names, *, speed=0.05, rot_speed=0.5) -> dict:
+    """The original-format arrays of a casa trial measured at link 7 (``names``: its goals).
+
+    A key's command ``joy_cmd`` is the joint velocity that moves link 7 at the key's
+    velocity (``speed`` along its axis; the pseudo-inverse of link 7's Jacobian), plus
+    ``rot_speed`` on joint 7 for a rotate key (``rot+`` backwards), so that the importer's
+    reading of keys from ``joy_cmd`` gives the trial's keys back. The inference rows are the
+    trial's betas and beliefs every 0.5 s (10 ticks), row 0 at t = 0, which
+    ``inf_start_time`` does not time.
+    """
+    from casa_core.robot.keys import KEY_DIRECTIONS, parse_keys
+    from casa_core.robot.kinematics import jacobian
+
+    t = frame["t"].to_numpy(dtype=float)
+    q = frame[[f"q{i}" for i in range(1, 8)]].to_numpy(dtype=float)
+    commands = np.zeros_like(q)
+    for row, (angles, cell) in enumerate(zip(q, frame["keys"], strict=True)):
+        direction = sum((KEY_DIRECTIONS[key] for key in parse_keys(cell)), np.zeros(4))
+        if np.any(direction[:3]):
+            link7 = jacobian(angles, "link7")[:3]
+            commands[row] = np.linalg.pinv(link7) @ (speed * direction[:3])
+        commands[row, 6] -= rot_speed * direction[3]
+    steps = np.arange(0, len(t), 10)
+    belief = frame[[f"belief:{name}" for name in names]].to_numpy(dtype=float)[steps]
+    beta = frame[[f"beta:{name}" for name in names]].to_numpy(dtype=float)[steps]
+    return {
+        "cmdpos_time": t,
+        "curr_pos": q,
+        "joy_cmd": commands,
+        "inf_start_time": t[steps[1:]],
+        "belief_hist": belief,
+        "beta_hist": beta,
+        "start_T": np.array(1.6e9),
+    }

@@ -23,7 +23,7 @@ from casa_core.io import read_trial
 from casa_core.io.original.importer import ORIGINAL_SCENE
 from casa_core.io.original.sessions import REFERENCE_ANGLES, reference_q
 from casa_core.robot import kinematics as kin
-from casa_core.scene import load_scene
+from casa_core.scene import DEFAULT_SCENE, load_scene
 
 #: Sample times: about 18 Hz, irregular (steps of 0.05 and 0.06 s), 3.0 s in all.
 TIMES = np.cumsum(np.r_[0.0, np.tile([0.05, 0.06], 27), 0.03])
@@ -153,17 +153,20 @@ def test_metadata_from_the_file_name(sessions, tmp_path):
         assert meta["started_at"] == "2020-09-13T12:26:40+00:00"  # start_T 1.6e9 s
 
 
-def test_positions_are_the_tool_point_of_the_joint_angles(sessions, tmp_path):
+@pytest.mark.parametrize(("scene", "point"), [(None, "link7"), (DEFAULT_SCENE, "tool")])
+def test_positions_are_the_scenes_point_of_the_joint_angles(sessions, tmp_path, scene, point):
     out = tmp_path / "out"
-    assert run_import(sessions, out) == 0
+    assert run_import(sessions, out, *([] if scene is None else ["--scene", str(scene)])) == 0
     _, frame = read_trial(out / "P03" / "task1c")
     # Ticks of 0.05 s from 0 to the last sample (3.0 s): 61 rows.
     assert np.allclose(frame["t"], np.arange(61) * 0.05)
     q = frame[[f"q{i}" for i in range(1, 8)]].to_numpy()
     # The angles are linear in time, so linear interpolation is exact at every tick.
     assert np.allclose(q, joint_angles(frame["t"]), atol=1e-12)
-    tool = np.array([kin.forward_kinematics(row)[:3, 3] for row in q])
-    assert np.allclose(frame[["x", "y", "z"]].to_numpy(), tool, atol=1e-12)
+    # The authors' layout is measured at link 7 (its `point`), ours at the tool point.
+    frames = [kin.link_frames(row) for row in q]
+    expected = np.array([f[6 if point == "link7" else 7][:3, 3] for f in frames])
+    assert np.allclose(frame[["x", "y", "z"]].to_numpy(), expected, atol=1e-12)
     rot = [kin.rot_of(kin.forward_kinematics(row)[:3, :3]) for row in q]
     assert np.allclose(frame["rot"], np.unwrap(rot), atol=1e-12)
 
@@ -318,25 +321,31 @@ def test_validate_names_the_key_of_a_bad_dataset_scene(sessions, tmp_path, capsy
     assert f"{scene}: key 'goals.red': [scene] missing" in capsys.readouterr().err
 
 
-def test_the_scene_holds_the_tool_points_and_link7_of_the_reference_angles():
+def test_the_scene_holds_link7_and_the_tool_points_of_the_reference_angles():
     scene = load_scene(ORIGINAL_SCENE)
+    assert scene.point == "link7"
     roles = {"start": "start", "green": "goal 0", "purple": "goal 1", "red": "unknown goal"}
     assert set(REFERENCE_ANGLES) == set(roles.values())
     for name, reference in roles.items():
-        tool = kin.forward_kinematics(reference_q(reference))[:3, 3]
+        link7 = kin.link7_position(reference_q(reference))
         written = scene.start.position if name == "start" else scene.goals[name]
-        assert np.allclose(written, tool, atol=0.0005 + 1e-9), name  # rounded to 1 mm
+        assert np.allclose(written, link7, atol=0.0005 + 1e-9), name  # rounded to 1 mm
         if name != "start":
-            link7 = kin.link7_position(reference_q(reference))
-            assert np.allclose(scene.goal(name, "link7"), link7, atol=0.0005 + 1e-9), name
+            tool = kin.forward_kinematics(reference_q(reference))[:3, 3]
+            assert np.allclose(scene.goal(name, "tool"), tool, atol=0.0005 + 1e-9), name
     # The original's goal 0 at link 7, to 1 mm, as docs/data-contracts.md gives it.
-    assert scene.link7_goals["green"] == (-0.548, -0.444, 0.424)
+    assert scene.goals["green"] == (-0.548, -0.444, 0.424)
+    assert np.allclose(scene.start.joints, np.radians(REFERENCE_ANGLES["start"]))
     assert scene.start.rot == 0.0
+    # The pouring pose: 15 cm from the unknown goal toward the base, 4.8 cm lower.
+    offset = np.subtract(scene.pouring.position, scene.goals["red"])
+    assert np.allclose(offset, [0.0, 0.15, -0.048], atol=1e-9)
     # The file is plain YAML with the scene's keys and nothing else.
     assert set(yaml.safe_load(ORIGINAL_SCENE.read_text())) == {
+        "point",
         "start",
         "goals",
-        "link7",
+        "tool",
         "pouring",
         "teleop",
     }

@@ -155,7 +155,7 @@ def test_the_robots_action_becomes_joint_velocities_that_move_the_tool_point_by_
                 assert np.linalg.norm((after - before)[:3] / 0.05 - velocity[:3]) < 0.1 * speed
         assert np.linalg.norm((after - start)[:3] / 2.0 - velocity[:3]) < 0.1 * speed
         # The tool velocity of a joint command is the Jacobian's: the follow command's is v.
-        predicted = drive.teleop.tool_velocity(drive.teleop.follow(velocity))
+        predicted = drive.teleop.state_velocity(drive.teleop.follow(velocity))
         assert np.linalg.norm(predicted[:3] - velocity[:3]) < 0.1 * speed
 
 

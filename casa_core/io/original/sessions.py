@@ -13,11 +13,13 @@ original implementation's sessions"); in short:
   the trial: a jump of more than pi between two samples is a wrap, not motion) are
   interpolated linearly; keys, ``alpha``, betas and beliefs hold the value of the last
   sample (or inference step) at or before the tick.
-* **Positions.** ``q1..q7`` are the joint angles; ``x, y, z`` the tool point and ``rot``
-  the turn of the tool about its axis (:func:`~casa_core.robot.kinematics.rot_of`,
-  unwrapped), both through our kinematics of the same JACO (joint angles mean the same).
-* **Keys.** The user's command ``joy_cmd`` is a joint velocity. Its tool velocity
-  ``J(q)[:3] @ joy_cmd`` gives ``x+``/``x-`` (and ``y``, ``z``) on each axis where it
+* **Positions.** ``q1..q7`` are the joint angles; ``x, y, z`` the scene's point (its
+  ``point``: link 7's origin on the authors' layout, the original's end effector; the
+  tool point by default) and ``rot`` the turn of the tool about its axis
+  (:func:`~casa_core.robot.kinematics.rot_of`, unwrapped), both through our kinematics of
+  the same JACO (joint angles mean the same).
+* **Keys.** The user's command ``joy_cmd`` is a joint velocity. Its velocity at the same
+  point, ``J(q)[:3] @ joy_cmd``, gives ``x+``/``x-`` (and ``y``, ``z``) on each axis where it
   exceeds :data:`KEY_FRACTION` of the key speed 0.05 m/s; a joint-7 velocity beyond the
   same fraction of 0.5 rad/s gives ``rot-`` (positive) or ``rot+`` (negative: our rotate
   key turns joint 7 backwards, see :mod:`casa_core.robot.sim`). Joint 7 moves neither the
@@ -31,7 +33,7 @@ original implementation's sessions"); in short:
   ``clip(1 / beta of the most likely goal, 0, 1)`` (a negative beta gives 0, as the
   original applied it); PBA ``clip(d / 0.55, 0, 1)`` with ``d`` the distance of link 7
   (the original's end effector) at the step to the most likely goal's link-7 position (the
-  scene's `link7`, else the link 7 of the original's goal angles);
+  scene's goals at link 7, else the link 7 of the original's goal angles);
   NA 1.
 """
 
@@ -195,8 +197,9 @@ def _carry(rows: np.ndarray, good: np.ndarray, initial: np.ndarray) -> np.ndarra
     return out
 
 
-def command_keys(q: np.ndarray, command: np.ndarray) -> str:
-    """The keys (space-separated, in :data:`~casa_core.vocabulary.KEYS` order) of one command.
+def command_keys(q: np.ndarray, command: np.ndarray, point: str = "tool") -> str:
+    """The keys (space-separated, in :data:`~casa_core.vocabulary.KEYS` order) of one
+    command, read from its velocity at ``point``.
 
     Examples
     --------
@@ -207,7 +210,7 @@ def command_keys(q: np.ndarray, command: np.ndarray) -> str:
     """
     if not np.any(command):
         return ""
-    velocity = matmul(kin.jacobian(q)[:3], command)
+    velocity = matmul(kin.jacobian(q, point)[:3], command)
     held = set()
     for axis, v in zip("xyz", velocity, strict=True):
         if abs(v) > KEY_FRACTION * SPEED:
@@ -234,7 +237,9 @@ def _held(times: np.ndarray, ticks: np.ndarray) -> np.ndarray:
     return np.searchsorted(times, ticks + 1e-9, side="right") - 1
 
 
-def convert_session(session: Session, method: str, goal_names, link7_goals=None) -> Converted:
+def convert_session(
+    session: Session, method: str, goal_names, link7_goals=None, *, point: str = "tool"
+) -> Converted:
     """The casa-trial/1 time series of a session (module docs give the rules).
 
     Parameters
@@ -246,8 +251,11 @@ def convert_session(session: Session, method: str, goal_names, link7_goals=None)
         Our names of the session's goals, in its order (``belief_hist``'s columns).
     link7_goals : mapping of str to 3 floats, optional
         The link-7 positions of the known goals, from which PBA's distance is measured
-        (the scene's ``link7``); default the link 7 of the original's goal angles
+        (the scene's goals at link 7); default the link 7 of the original's goal angles
         (:data:`REFERENCE_ANGLES`).
+    point : {"tool", "link7"}
+        The point whose position ``x, y, z`` is, and whose velocity gives the keys (the
+        scene's ``point``).
 
     Raises
     ------
@@ -272,10 +280,12 @@ def convert_session(session: Session, method: str, goal_names, link7_goals=None)
     ticks = np.round(np.arange(int(np.floor(last / TICK + 1e-9)) + 1) * TICK, 6)
     unwrapped = np.unwrap(session.q, axis=0)
     q = np.column_stack([np.interp(ticks, session.time, unwrapped[:, j]) for j in range(7)])
-    frames = [kin.forward_kinematics(row) for row in q]
-    position = np.array([frame[:3, 3] for frame in frames])
-    rot = np.unwrap([kin.rot_of(frame[:3, :3]) for frame in frames])
-    sample_keys = [command_keys(qi, ci) for qi, ci in zip(session.q, session.command, strict=True)]
+    frames = [kin.link_frames(row) for row in q]
+    position = np.array([frame[kin.POINT_FRAMES[point]][:3, 3] for frame in frames])
+    rot = np.unwrap([kin.rot_of(frame[-1][:3, :3]) for frame in frames])
+    sample_keys = [
+        command_keys(qi, ci, point) for qi, ci in zip(session.q, session.command, strict=True)
+    ]
     at_sample = _held(session.time, ticks)
     keys = ["" if i < 0 else sample_keys[i] for i in at_sample]
     table: dict[str, Any] = {"t": ticks, "x": position[:, 0], "y": position[:, 1]}
