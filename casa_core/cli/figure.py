@@ -34,6 +34,13 @@ def _add_figure(commands) -> None:
     case_study.add_argument("--participant", help="whose runs (default: the first)")
     for sub in (arbitration, case_study):
         sub.add_argument("--epsilon", type=positive_float, help="draw the confidence threshold")
+    for sub in (objective, likert, arbitration, case_study):
+        sub.add_argument(
+            "--setup",
+            metavar="TEXT",
+            help="the setup the data come from, e.g. 'scene scene.yaml (teleop held)', "
+            "on the caption's last line",
+        )
     scene = figures.add_parser("scene", help="the arm and scene, pybullet-rendered")
     scene_option(scene)
     for sub in (objective, likert, arbitration, case_study, scene):
@@ -44,7 +51,7 @@ def _add_figure(commands) -> None:
 def _figure(args) -> int:
     from casa_core.figures.build import INPUTS, build_figure
 
-    options = ("epsilon", "participant")
+    options = ("epsilon", "participant", "setup")
     inputs = {k: getattr(args, k) for k in (*INPUTS[args.figure], *options) if hasattr(args, k)}
     try:
         if args.figure == "scene":

@@ -60,7 +60,11 @@ def prepare_arbitration(arbitration: pd.DataFrame) -> tuple[pd.DataFrame, pd.Dat
 
 
 def arbitration_figure(
-    arbitration: pd.DataFrame, epsilon: float | None = None, title: str | None = None
+    arbitration: pd.DataFrame,
+    epsilon: float | None = None,
+    title: str | None = None,
+    *,
+    setup: str | None = None,
 ) -> Figure:
     """Draw belief, confidence and the three arbitrations' alpha over time.
 
@@ -75,6 +79,9 @@ def arbitration_figure(
         confidence axes when given (it is a setting of the run, not in the table).
     title : str, optional
         First words of the caption.
+    setup : str, optional
+        The setup the data come from (e.g. "scene scene.yaml (teleop held)"), on the
+        caption's last line.
 
     Returns
     -------
@@ -134,6 +141,6 @@ def arbitration_figure(
         )
         if epsilon is not None:
             caption += f" Dotted: the misspecification threshold epsilon = {epsilon:g}."
-        style.add_caption(fig, caption)
+        style.add_caption(fig, caption, style.setup_line(setup))
     fig.axes_by_name = axes  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig

@@ -31,7 +31,8 @@ def build_figure(name: str, out: str | Path, **inputs) -> list[Path]:
     **inputs
         Paths of the input tables by the names in :data:`INPUTS` (``stats`` is optional
         for ``objective`` and ``likert``), plus the options ``epsilon`` (arbitration,
-        case_study) and ``participant`` (case_study). The scene's ``image`` and
+        case_study), ``participant`` (case_study) and ``setup`` (every figure but the
+        scene: the setup its data come from, on the caption's last line). The scene's ``image`` and
         ``landmarks`` (optional) come from the caller
         (:func:`casa_core.robot.render.render_scene` and
         :func:`~casa_core.robot.render.scene_landmarks`), since figures know no robots.
@@ -45,22 +46,27 @@ def build_figure(name: str, out: str | Path, **inputs) -> list[Path]:
 
     if name not in INPUTS:
         raise ValueError(f"unknown figure {name!r}; expected one of {', '.join(INPUTS)}")
-    epsilon = inputs.get("epsilon")
+    epsilon, setup = inputs.get("epsilon"), inputs.get("setup")
     if name == "objective":
         stats = inputs.get("stats")
         fig = figures.objective_figure(
-            read_table(inputs["trials"]), read_table(stats) if stats else None
+            read_table(inputs["trials"]), read_table(stats) if stats else None, setup=setup
         )
     elif name == "likert":
         stats = inputs.get("stats")
         fig = figures.likert_figure(
-            read_table(inputs["likert"]), read_table(stats) if stats else None
+            read_table(inputs["likert"]), read_table(stats) if stats else None, setup=setup
         )
     elif name == "arbitration":
-        fig = figures.arbitration_figure(read_table(inputs["arbitration"]), epsilon=epsilon)
+        fig = figures.arbitration_figure(
+            read_table(inputs["arbitration"]), epsilon=epsilon, setup=setup
+        )
     elif name == "case_study":
         fig = figures.case_study_figure(
-            read_table(inputs["steps"]), participant=inputs.get("participant"), epsilon=epsilon
+            read_table(inputs["steps"]),
+            participant=inputs.get("participant"),
+            epsilon=epsilon,
+            setup=setup,
         )
     else:
         fig = figures.scene_figure(inputs["image"], inputs.get("landmarks"))

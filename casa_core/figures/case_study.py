@@ -78,6 +78,8 @@ def case_study_figure(
     participant: str | None = None,
     epsilon: float | None = None,
     title: str | None = None,
+    *,
+    setup: str | None = None,
 ) -> Figure:
     """Draw confidence and arbitration over time for each task of the case study.
 
@@ -93,6 +95,9 @@ def case_study_figure(
         a dotted line on the confidence panels, named in the legend and the caption.
     title : str, optional
         First words of the caption.
+    setup : str, optional
+        The setup the data come from (e.g. "scene scene.yaml (teleop held)"), on the
+        caption's last line.
 
     Returns
     -------
@@ -152,7 +157,7 @@ def case_study_figure(
             if ax.has_data():
                 ax.set_xlabel("Time (s)")
         _intent_legend(fig, grid[:, :2].ravel())
-        style.add_caption(fig, _caption(rows, participant, epsilon, title))
+        style.add_caption(fig, _caption(rows, participant, epsilon, title), style.setup_line(setup))
     fig.axes_grid = axes_grid  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig
 

@@ -116,7 +116,11 @@ def likert_tests(stats: pd.DataFrame | None) -> pd.DataFrame:
 
 
 def likert_figure(
-    likert: pd.DataFrame, stats: pd.DataFrame | None = None, title: str | None = None
+    likert: pd.DataFrame,
+    stats: pd.DataFrame | None = None,
+    title: str | None = None,
+    *,
+    setup: str | None = None,
 ) -> Figure:
     """Draw the Likert scores of a study.
 
@@ -134,6 +138,9 @@ def likert_figure(
     title : str, optional
         First words of the caption (default "Likert scores"); answers of simulated
         participants add that they are model output.
+    setup : str, optional
+        The setup the data come from (e.g. "scene scene.yaml (teleop held)"), on the
+        caption's last line.
 
     Returns
     -------
@@ -195,7 +202,7 @@ def likert_figure(
                 " dashed: against the paper's direction (Known Goal's CASA, or CASA after"
                 " learning, rated above the other condition), solid: in it."
             )
-        style.add_caption(fig, caption)
+        style.add_caption(fig, caption, style.setup_line(setup))
     return fig
 
 

@@ -185,7 +185,11 @@ def _flags(values: pd.Series, column: str) -> pd.Series:
 
 
 def objective_figure(
-    trials: pd.DataFrame, stats: pd.DataFrame | None = None, title: str | None = None
+    trials: pd.DataFrame,
+    stats: pd.DataFrame | None = None,
+    title: str | None = None,
+    *,
+    setup: str | None = None,
 ) -> Figure:
     """Draw the objective metrics and the success rate of a study.
 
@@ -205,6 +209,9 @@ def objective_figure(
     title : str, optional
         First words of the caption (default "Objective metrics"); the caption goes on
         with who the participants are (e.g. "simulated participants") and how many.
+    setup : str, optional
+        The setup the data come from (e.g. "scene scene.yaml (teleop held)"), on the
+        caption's last line.
 
     Returns
     -------
@@ -266,7 +273,8 @@ def objective_figure(
         for ax in grid.flat:
             ax.set_xticks([])
         _bars.condition_legend(fig, grid.flat, extra=[TIMED_OUT_LABEL])
-        style.add_caption(fig, " ".join([_caption(rows, stats, pooled, title), *notes]))
+        caption = " ".join([_caption(rows, stats, pooled, title), *notes])
+        style.add_caption(fig, caption, style.setup_line(setup))
     return fig
 
 

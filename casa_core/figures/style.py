@@ -194,6 +194,17 @@ def note_axes(ax, text: str) -> None:
         spine.set_visible(False)
 
 
+def setup_line(setup: str | None) -> str:
+    """The caption's line naming the setup the data come from; empty without one.
+
+    Examples
+    --------
+    >>> setup_line("scene scene.yaml (teleop held)"), setup_line(None)
+    ('Setup: scene scene.yaml (teleop held).', '')
+    """
+    return f"Setup: {setup}." if setup else ""
+
+
 def add_caption(fig: Figure, text: str, last_line: str = "") -> None:
     """A one-line caption at the bottom of the figure (data origin and notes).
 

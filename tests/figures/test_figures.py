@@ -771,3 +771,20 @@ def test_objective_rejects_a_flag_that_is_not_true_or_false():
     trials.loc[4, "success"] = "maybe"
     with pytest.raises(ValueError, match="trials row 4: success 'maybe' is not true or false"):
         objective_figure(trials)
+
+
+# --------------------------------------------------------------------------- setup
+
+
+def test_each_figure_of_a_study_names_its_setup_on_the_captions_last_line():
+    setup = "scene scene-original.yaml (teleop original)"
+    drawn = {
+        "objective": lambda **kw: objective_figure(make_trials(), **kw),
+        "likert": lambda **kw: likert_figure(make_likert(), **kw),
+        "arbitration": lambda **kw: arbitration_figure(make_arbitration(), **kw),
+        "case_study": lambda **kw: case_study_figure(make_steps(), **kw),
+    }
+    for name, draw in drawn.items():
+        caption = draw(setup=setup).texts[-1].get_text()  # the figure's own text: the caption
+        assert " ".join(caption.split()).endswith(f"Setup: {setup}."), name
+        assert "Setup:" not in texts(draw()), name

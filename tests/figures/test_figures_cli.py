@@ -53,7 +53,8 @@ def test_cli_writes_each_table_figure(tmp_path, capsys):
     }
     for name, arguments in runs.items():
         out = tmp_path / "figures" / name
-        assert main(["figure", name, *arguments, "--out", str(out)]) == 0
+        setup = ["--setup", "scene scene.yaml (teleop held)"]
+        assert main(["figure", name, *arguments, *setup, "--out", str(out)]) == 0
         assert out.with_suffix(".pdf").stat().st_size > 0
         assert out.with_suffix(".png").stat().st_size > 0
         assert f"casa figure {name}:" in capsys.readouterr().out

@@ -147,6 +147,16 @@ def dataset_scene(wildcards):
     return str(own) if own.is_file() else config["scene"]
 
 
+def setup_option(wildcards=None):
+    """`--setup` of a figure: the setup a dataset's data come from (a generated dataset's,
+    the config's; another's, its own scene), or the config's for the case study."""
+    if wildcards is None or wildcards.ds in GENERATED:
+        text = casa_variants.setup_text(config)
+    else:
+        text = casa_variants.setup_text({"scene": dataset_scene(wildcards)})
+    return f"--setup {shlex.quote(text)}" if text else ""
+
+
 def has_surveys(ds):
     """Whether a dataset has Likert answers; generated datasets always do."""
     return ds in GENERATED or any((RAW / ds).rglob("surveys.csv"))

@@ -21,9 +21,10 @@ rule figure_objective:
         "../envs/casa.yaml"
     params:
         stem=lambda wildcards: FIGURES / wildcards.ds / "objective",
+        setup=setup_option,
     shell:
         "exec casa figure objective --trials {input.trials} --stats {input.stats} "
-        "--out {params.stem} > {log} 2>&1"
+        "{params.setup} --out {params.stem} > {log} 2>&1"
 
 
 rule figure_likert:
@@ -44,9 +45,10 @@ rule figure_likert:
         "../envs/casa.yaml"
     params:
         stem=lambda wildcards: FIGURES / wildcards.ds / "likert",
+        setup=setup_option,
     shell:
         "exec casa figure likert --likert {input.likert} --stats {input.stats} "
-        "--out {params.stem} > {log} 2>&1"
+        "{params.setup} --out {params.stem} > {log} 2>&1"
 
 
 rule figure_scene:
@@ -79,9 +81,10 @@ rule figure_arbitration:
     params:
         stem=FIGURES / "arbitration",
         epsilon=config["case_study"]["epsilon"],
+        setup=setup_option(),
     shell:
         "exec casa figure arbitration --arbitration {input.arbitration} "
-        "--epsilon {params.epsilon} --out {params.stem} > {log} 2>&1"
+        "--epsilon {params.epsilon} {params.setup} --out {params.stem} > {log} 2>&1"
 
 
 rule figure_case_study:
@@ -101,6 +104,7 @@ rule figure_case_study:
     params:
         stem=FIGURES / "case_study",
         epsilon=config["case_study"]["epsilon"],
+        setup=setup_option(),
     shell:
         "exec casa figure case_study --steps {input.steps} --epsilon {params.epsilon} "
-        "--out {params.stem} > {log} 2>&1"
+        "{params.setup} --out {params.stem} > {log} 2>&1"
