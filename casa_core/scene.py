@@ -131,20 +131,24 @@ class Scene:
             raise SceneError(f"teleop mode {mode!r}: expected one of {', '.join(TELEOP_MODES)}")
         return dataclasses.replace(self, teleop=dataclasses.replace(self.teleop, mode=mode))
 
+    def goals_at(self, point: str | None = None) -> MappingProxyType:
+        """The goals by name at ``point`` (``"tool"`` or ``"link7"``; default the scene's
+        :attr:`point`); empty where the scene does not give them there."""
+        if point is None or point == self.point:
+            return self.goals
+        return self.goals_elsewhere.get(point, MappingProxyType({}))
+
     def goal(self, name: str, point: str | None = None) -> np.ndarray:
-        """The position of goal ``name`` at ``point`` (``"tool"`` or ``"link7"``; default
-        the scene's :attr:`point`).
+        """The position of goal ``name`` at ``point`` (as :meth:`goals_at`).
 
         Raises
         ------
         SceneError
             Naming the goals the scene has at that point.
         """
-        if point is None or point == self.point:
-            goals, key = self.goals, "goals"
-        else:
-            goals, key = self.goals_elsewhere.get(point, {}), point
+        goals = self.goals_at(point)
         if name not in goals:
+            key = "goals" if goals is self.goals else point
             raise SceneError(f"scene: {key} has no {name!r}; it has {', '.join(goals) or 'none'}")
         return np.array(goals[name], dtype=float)
 

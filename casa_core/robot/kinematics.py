@@ -158,7 +158,7 @@ def link7_position(q) -> np.ndarray:
     >>> link7_position(start).round(3)
     array([-0.376,  0.01 ,  0.446])
     """
-    return link_frames(q)[6][:3, 3].copy()
+    return point_position(q, "link7")
 
 
 #: The entry of :func:`link_frames` of each point the arm may be measured at

@@ -50,10 +50,10 @@ import pybullet as p
 
 from casa_core.fixed_order import matmul
 from casa_core.robot.keys import KEY_DIRECTIONS, check_keys
-from casa_core.robot.sim import TOOL_LINK
+from casa_core.robot.sim import POINT_LINKS
 
 #: pybullet's index of link 7 (the last arm link) in casa's URDF, just before the tool's.
-LINK7 = TOOL_LINK - 1
+LINK7 = POINT_LINKS["link7"]
 
 
 class OriginalTeleoperation:

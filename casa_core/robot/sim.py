@@ -188,7 +188,10 @@ class ArmSimulation:
     def link7(self) -> np.ndarray:
         """Position ``(3,)`` of the link-7 origin, the original's end effector, read now."""
         link = p.getLinkState(
-            self.robot, TOOL_LINK - 1, computeForwardKinematics=True, physicsClientId=self.client
+            self.robot,
+            POINT_LINKS["link7"],
+            computeForwardKinematics=True,
+            physicsClientId=self.client,
         )
         return np.array(link[4])
 

@@ -156,9 +156,8 @@ def _convert(path, name: SessionName, participant: str, target: Path, scene, war
     ``warnings`` gets what is imported but said (a session the robot drove)."""
     session = read_session(path)
     names = goal_names(name, session.belief.shape[1])
-    at_link7 = scene.goals if scene.point == "link7" else scene.goals_elsewhere.get("link7")
     converted = convert_session(
-        session, name.method, names, dict(at_link7) if at_link7 else None, point=scene.point
+        session, name.method, names, scene.goals_at("link7") or None, point=scene.point
     )
     frame = converted.frame
     notes = (
