@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from casa_core.vocabulary import POINTS, TASKS, TELEOP_MODES
+from casa_core.vocabulary import POINTS, TASKS, TELEOP_MODES, VIEWS
 
 #: The scene the package is set up with: ``config/scene.yaml`` of the repository. A path
 #: given by a user is resolved against the working directory instead.
@@ -80,6 +80,17 @@ class Teleop:
 
 
 @dataclass(frozen=True)
+class View:
+    """A camera the scene pins (:mod:`casa_core.robot.camera`): pybullet's orbit camera at
+    ``target`` (m), ``distance`` (m), ``yaw`` and ``pitch`` (degrees)."""
+
+    target: tuple[float, float, float]
+    distance: float
+    yaw: float
+    pitch: float
+
+
+@dataclass(frozen=True)
 class Scene:
     """A study's layout; build it with :func:`load_scene` or :meth:`Scene.from_dict`.
 
@@ -102,6 +113,10 @@ class Scene:
         Optional: by task, the positions its intended path passes through, in order,
         between the start and the task's end (:func:`casa_core.assist.tasks.task_waypoints`);
         a task not named goes straight.
+    view : Mapping[str, View]
+        Optional: the cameras the scene pins, by view (:data:`~casa_core.vocabulary.VIEWS`:
+        ``window``, ``figure``); a view not pinned frames the scene's positions
+        (:func:`casa_core.robot.camera.scene_camera`).
     """
 
     start: Start
@@ -111,6 +126,7 @@ class Scene:
     point: str = POINTS[0]
     goals_elsewhere: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     via: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    view: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
     @property
     def start_state(self) -> np.ndarray:
@@ -157,7 +173,7 @@ class Scene:
         """Validate a parsed scene file; ``source`` names it in errors."""
         reader = _Reader(source)
         top = reader.mapping(
-            data, "", ("start", "goals", "pouring", "teleop"), ("point", *POINTS, "via")
+            data, "", ("start", "goals", "pouring", "teleop"), ("point", *POINTS, "via", "view")
         )
         point = top.get("point", POINTS[0])
         if point not in POINTS:
@@ -179,6 +195,7 @@ class Scene:
         if mode not in TELEOP_MODES:
             reader.fail("teleop.mode", f"must be one of {', '.join(TELEOP_MODES)}, got {mode!r}")
         via = reader.mapping(top.get("via", {}), "via", (), TASKS)
+        view = reader.mapping(top.get("view", {}), "view", (), VIEWS)
         elsewhere = {
             other: reader.mapping(top[other], other, None) for other in POINTS if other in top
         }
@@ -208,6 +225,7 @@ class Scene:
             ),
             point=point,
             via=MappingProxyType({task: reader.path(via, f"via.{task}") for task in via}),
+            view=MappingProxyType({name: reader.view(view, f"view.{name}") for name in view}),
             goals_elsewhere=MappingProxyType(
                 {
                     other: MappingProxyType(
@@ -301,6 +319,18 @@ class _Reader:
             self.fail(key, f"must be a list of positions [x, y, z], got {value!r}")
         positions = {str(index): position for index, position in enumerate(value)}
         return tuple(self.vector(positions, f"{key}.{index}") for index in positions)
+
+    def view(self, node: dict, key: str) -> View:
+        """A pinned camera: ``target`` [x, y, z], ``distance`` (positive), ``yaw``, ``pitch``."""
+        camera = self.mapping(
+            node[key.rsplit(".", 1)[-1]], key, ("target", "distance", "yaw", "pitch")
+        )
+        return View(
+            self.vector(camera, f"{key}.target"),
+            self.number(camera, f"{key}.distance", positive=True),
+            self.number(camera, f"{key}.yaw"),
+            self.number(camera, f"{key}.pitch"),
+        )
 
     def vector(self, node: dict, key: str) -> tuple[float, float, float]:
         x, y, z = self.numbers(node, key, 3, "numbers [x, y, z]")

@@ -114,6 +114,9 @@ POINTS = ("tool", "link7")
 #: tool orientation held (this project's); ``original``, link 7's target by position-only
 #: inverse kinematics, the orientation following the reach (the authors' implementation).
 TELEOP_MODES = ("held", "original")
+#: The scene's two views (:mod:`casa_core.robot.camera`): the participant's window and the
+#: scene figure.
+VIEWS = ("window", "figure")
 
 
 def condition_of(method: str, phase: str) -> str | None:

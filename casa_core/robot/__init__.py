@@ -12,5 +12,6 @@ The robot knows nothing of learning or the study. The modules, each with one job
   held keys to joint velocities through inverse kinematics of link 7's position;
 - :mod:`~casa_core.robot.teleop`: the teleoperation window and its keyboard;
 - :mod:`~casa_core.robot.screens`: the window of ``casa session``, screen by screen;
-- :mod:`~casa_core.robot.render`: the scene rendered for ``figures/scene.png``.
+- :mod:`~casa_core.robot.render`: the scene rendered for ``figures/scene.png``;
+- :mod:`~casa_core.robot.camera`: where the window and the scene figure look.
 """

@@ -17,8 +17,9 @@ from collections.abc import Mapping
 import numpy as np
 
 from casa_core.assist.tasks import intended_trajectory
-from casa_core.fixed_order import length, matmul
-from casa_core.robot.kinematics import ee_rotation
+from casa_core.fixed_order import length
+from casa_core.robot.camera import scene_camera
+from casa_core.robot.kinematics import ee_rotation, forward_kinematics
 from casa_core.robot.scene import BOWL_RADIUS, COLORS, bowl_height
 from casa_core.scene import Scene
 
@@ -29,15 +30,6 @@ CUP_RADIUS, CUP_LENGTH = 0.042, 0.12  # m
 #: The plumb line from the pouring pose to the bowl: dashes and gaps (m), and colour.
 DASH, GAP = 0.018, 0.012
 PLUMB_RGBA = (0.15, 0.15, 0.15, 1.0)
-
-#: The camera: looking at the workspace from the front left, above the table.
-CAMERA = {
-    "target": (0.32, -0.02, 0.18),
-    "distance": 1.05,
-    "yaw": 75.0,
-    "pitch": -35.0,
-    "fov": 40.0,
-}
 
 
 def _segment(client: int, a: np.ndarray, b: np.ndarray, rgba, radius: float = TUBE_RADIUS) -> None:
@@ -69,9 +61,9 @@ def _segment(client: int, a: np.ndarray, b: np.ndarray, rgba, radius: float = TU
     )
 
 
-def _cup(client: int, position, rot: float, rgba) -> None:
-    """The cup held at ``position`` with the tool turned to ``rot`` (its mouth along x)."""
-    axis = ee_rotation(rot)[:, 0]
+def _cup(client: int, position, rotation: np.ndarray, rgba) -> None:
+    """The cup held at ``position`` by a tool of orientation ``rotation`` (mouth along x)."""
+    axis = rotation[:, 0]
     centre = np.asarray(position, dtype=float)
     half = 0.5 * CUP_LENGTH * axis
     _segment(client, centre - half, centre + half, rgba, radius=CUP_RADIUS)
@@ -89,38 +81,35 @@ def _plumb_line(client: int, top, bottom) -> None:
         start = end + GAP
 
 
+def start_tool_pose(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """The tool's position ``(3,)`` and orientation ``(3, 3)`` at the scene's start: of its
+    start joint angles where it gives them, else the held orientation at its start."""
+    if scene.start.joints is not None:
+        pose = forward_kinematics(scene.start.joints)
+        return pose[:3, 3], pose[:3, :3]
+    return np.asarray(scene.start.position, dtype=float), ee_rotation(scene.start.rot)
+
+
 def landmark_positions(scene: Scene) -> dict[str, np.ndarray]:
     """The scene's points the figure labels, in the robot base frame (m).
 
     ``"cup"``: the top of the cup in the hand at the start; ``"pouring pose"``: where
     the cup is held to pour; ``"bowl"``: the near rim of the bowl's top, under it.
     """
-    start = np.asarray(scene.start.position, dtype=float)
+    tool, rotation = start_tool_pose(scene)
     pour = np.asarray(scene.pouring.position, dtype=float)
     bowl = np.asarray(scene.pouring.bowl, dtype=float)
     return {
-        "cup": start + 0.5 * CUP_LENGTH * ee_rotation(scene.start.rot)[:, 0],
+        "cup": tool + 0.5 * CUP_LENGTH * rotation[:, 0],
         "pouring pose": pour,
         "bowl": np.array([bowl[0] - BOWL_RADIUS, bowl[1], bowl_height(scene)]),
     }
 
 
-def _camera(width: int, height: int) -> tuple[list[float], list[float]]:
-    """pybullet's view and projection matrices of :data:`CAMERA` (column-major, 16 each)."""
-    import pybullet as p
-
-    view = p.computeViewMatrixFromYawPitchRoll(
-        cameraTargetPosition=CAMERA["target"],
-        distance=CAMERA["distance"],
-        yaw=CAMERA["yaw"],
-        pitch=CAMERA["pitch"],
-        roll=0.0,
-        upAxisIndex=2,
-    )
-    projection = p.computeProjectionMatrixFOV(
-        fov=CAMERA["fov"], aspect=width / height, nearVal=0.05, farVal=5.0
-    )
-    return view, projection
+def _camera(scene: Scene, width: int, height: int) -> tuple[list[float], list[float]]:
+    """pybullet's view and projection matrices of the scene's figure camera."""
+    camera = scene_camera(scene, "figure")
+    return camera.view_matrix(), camera.projection_matrix(width / height)
 
 
 def scene_landmarks(
@@ -134,15 +123,10 @@ def scene_landmarks(
         Name -> ``(column, row)`` from the image's top-left corner, for an image of
         ``width`` x ``height`` pixels rendered with the same camera.
     """
-    view, projection = _camera(width, height)
-    # pybullet's matrices are column-major: transpose to act on column vectors.
-    to_clip = matmul(np.asarray(projection).reshape(4, 4).T, np.asarray(view).reshape(4, 4).T)
-    out = {}
-    for name, point in landmark_positions(scene).items():
-        clip = matmul(to_clip, np.r_[point, 1.0])
-        x, y = clip[:2] / clip[3]
-        out[name] = (float((x + 1) / 2 * width), float((1 - y) / 2 * height))
-    return out
+    camera = scene_camera(scene, "figure")
+    landmarks = landmark_positions(scene)
+    pixels = camera.pixels(np.array(list(landmarks.values())), width=width, height=height)
+    return {name: (float(u), float(v)) for name, (u, v) in zip(landmarks, pixels, strict=True)}
 
 
 def _path(client: int, positions: np.ndarray, rgba) -> None:
@@ -206,11 +190,11 @@ def render_scene(
             # One sample a second is plenty: the references are straight segments.
             positions = intended_trajectory(task, scene, dt=1.0)[:, 1:4]
             _path(client, positions, to_rgba(colour))
-        _cup(client, scene.start.position, scene.start.rot, COLORS["cup"])
-        _cup(client, scene.pouring.position, scene.pouring.tilt, COLORS["cup poured"])
+        _cup(client, *start_tool_pose(scene), COLORS["cup"])
+        _cup(client, scene.pouring.position, ee_rotation(scene.pouring.tilt), COLORS["cup poured"])
         bowl = scene.pouring.bowl
         _plumb_line(client, scene.pouring.position, (bowl[0], bowl[1], bowl_height(scene)))
-        view, projection = _camera(width, height)
+        view, projection = _camera(scene, width, height)
         _, _, rgba, _, _ = p.getCameraImage(
             width,
             height,

@@ -1,8 +1,9 @@
 """``casa teleop``: a person drives the arm from the keyboard in a pybullet window.
 
 The window shows the arm, the table, the goals (green, purple, red) and the pouring
-target with its bowl, seen from behind the robot, so that the arrow keys move the cup
-the way they point on screen. A countdown (3, 2, 1, GO) opens the trial; a banner
+target with its bowl, seen from behind the robot (the scene's window camera,
+:mod:`casa_core.robot.camera`), so that the arrow keys move the cup the way they point
+on screen. A countdown (3, 2, 1, GO) opens the trial; a banner
 tells the time, the held keys and the robot's share of control (1 - alpha); the trial
 ends when the person presses Enter (or at ``max_duration``), and the window says
 where the log was written. This module holds the window and the keyboard;
@@ -29,6 +30,7 @@ import time
 import numpy as np
 import pybullet as p
 
+from casa_core.robot.camera import scene_camera
 from casa_core.robot.sim import ArmSimulation
 
 #: pybullet key code -> log key name.
@@ -44,10 +46,6 @@ KEY_BINDINGS = {
 }
 FINISH_KEYS = (p.B3G_RETURN,)
 HELP = "arrow keys: move the cup   W / S: up / down   A / D: tilt to pour / back   Enter: finished"
-#: Camera behind the robot, looking along its +x axis (screen right is -y).
-#: Pitched down enough that the arm does not hide the purple goal.
-CAMERA = {"cameraDistance": 1.25, "cameraYaw": -90.0, "cameraPitch": -50.0}
-CAMERA_TARGET = [0.4, -0.05, 0.1]
 
 
 class KeyLatch:
@@ -125,8 +123,13 @@ class Window:
             client = sim.client
             p.configureDebugVisualizer(p.COV_ENABLE_KEYBOARD_SHORTCUTS, 0, physicsClientId=client)
             p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=client)
+            camera = scene_camera(sim.scene, "window")
             p.resetDebugVisualizerCamera(
-                cameraTargetPosition=CAMERA_TARGET, physicsClientId=client, **CAMERA
+                cameraDistance=camera.distance,
+                cameraYaw=camera.yaw,
+                cameraPitch=camera.pitch,
+                cameraTargetPosition=list(camera.target),
+                physicsClientId=client,
             )
 
     def say(self, slot: str, text: str, position, size: float = 1.5, color=(0, 0, 0)) -> None:

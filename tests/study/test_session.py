@@ -39,6 +39,7 @@ from casa_core.study.session import (
 )
 from casa_core.study.simulate import participant_id
 from casa_core.vocabulary import METHODS, QUESTIONS
+from tests.display import start_xvfb
 
 #: Words that would tell a participant which method a robot is.
 METHOD_WORDS = re.compile(
@@ -310,21 +311,6 @@ SHOTS = (
     "confirm-abort",
     "end",
 )
-
-
-def start_xvfb():
-    read, write = os.pipe()
-    server = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
-        pass_fds=(write,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    os.close(write)
-    with os.fdopen(read) as pipe:
-        display = pipe.readline().strip()
-    assert display, "Xvfb did not report a display number"
-    return server, f":{display}"
 
 
 class Operator:

@@ -15,6 +15,7 @@ from casa_core.io import read_trial, validate_paths
 from casa_core.robot import teleop
 from casa_core.study.key_sources import ScriptedKeys
 from casa_core.study.teleop_session import run_teleop
+from tests.display import start_xvfb
 
 
 def test_headless_teleop_writes_a_valid_log_and_never_overwrites(scene, tmp_path):
@@ -148,28 +149,9 @@ WINDOW_SCRIPT = textwrap.dedent(
 
 @pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb is not on PATH: no display")
 def test_teleop_in_a_real_window_under_xvfb(tmp_path):
-    display_pipe_r, display_pipe_w = os.pipe()
-    server = subprocess.Popen(
-        [
-            "Xvfb",
-            "-displayfd",
-            str(display_pipe_w),
-            "-screen",
-            "0",
-            "1024x768x24",
-            "-nolisten",
-            "tcp",
-        ],
-        pass_fds=(display_pipe_w,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
+    server, display = start_xvfb()
     try:
-        os.close(display_pipe_w)
-        with os.fdopen(display_pipe_r) as pipe:
-            display = pipe.readline().strip()
-        assert display, "Xvfb did not report a display number"
-        env = {**os.environ, "DISPLAY": f":{display}"}
+        env = {**os.environ, "DISPLAY": display}
         run = subprocess.run(
             [sys.executable, "-c", WINDOW_SCRIPT, str(tmp_path)],
             env=env,
