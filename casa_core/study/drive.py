@@ -15,7 +15,9 @@ The scene's ``teleop.mode`` (:data:`casa_core.vocabulary.TELEOP_MODES`) chooses:
   wrist turn: the scene's start ``rot`` plus joint 7's turn (backwards positive, as
   ``rot+``) since the start, since the tool's orientation no longer tells it.
 
-Both start the arm at the scene's start (:meth:`ArmSimulation.reset_to_start`): at its
+Each also drives the arm by the robot's command alone (``follow``), as the learned pour's
+tilt is measured (:func:`casa_core.study.learning_evidence.tool_tilt_deg`). Both start the
+arm at the scene's start (:meth:`ArmSimulation.reset_to_start`): at its
 joint angles where the scene gives them (``start.joints``), else at the inverse kinematics
 of its position with the held orientation.
 """
@@ -49,6 +51,11 @@ class HeldDrive:
         user_action = keys_to_action(held, teleop.speed, teleop.rot_speed)
         action = assistant.act(state, user_action, elapsed_in_step=elapsed_in_step)
         return self.sim.step(action)
+
+    def follow(self, velocity) -> np.ndarray:
+        """Drive one tick by the robot's own command, the state velocity ``velocity``
+        ``[vx, vy, vz, vrot]`` (as u* alone); return the new state."""
+        return self.sim.step(velocity)
 
 
 class OriginalDrive:
@@ -92,6 +99,11 @@ class OriginalDrive:
         state = self.sim.step_joints(blend(alpha, user_joints, robot_joints))
         self.teleop.reset()
         return self._with_wrist_turn(state)
+
+    def follow(self, velocity) -> np.ndarray:
+        """Drive one tick by the robot's own command, the state velocity ``velocity``
+        ``[vx, vy, vz, vrot]`` turned into joint velocities as u* is; return the new state."""
+        return self._with_wrist_turn(self.sim.step_joints(self.teleop.follow(velocity)))
 
 
 DRIVES: dict[str, type[HeldDrive] | type[OriginalDrive]] = {

@@ -197,7 +197,7 @@ def learn_from_demonstrations(
     path, _history, seconds = learn_to_library(
         demos_dir, name, library=library, objects=scene_objects(scene), **options
     )
-    evidence = learning_evidence(load_intent(path).intent, read[0])
+    evidence = learning_evidence(load_intent(path).intent, read[0], scene=scene)
     row.update(evidence)
     timing["train_seconds"] = seconds
     return row, timing

@@ -66,7 +66,7 @@ def test_irl_recovers_a_known_goal(learned):
     assert np.linalg.norm(trajectory[-1, :3] - GOAL) < 0.05
     # It comes from the cost, not from staying put: the start is 0.51 m away.
     assert np.linalg.norm(trajectory[0, :3] - GOAL) > 0.5
-    evidence = learning_evidence(intent, demos)
+    evidence = learning_evidence(intent, demos, scene=SCENE)
     assert evidence["endpoint_error_m"] < 0.05
     assert evidence["final_tilt_deg"] < 30.0  # demonstrations keep the cup upright
 
@@ -84,7 +84,7 @@ def test_irl_learns_to_pour():
         demo[:, 4] += rng.normal(0.0, 0.02, len(demo))
         demos.append(demo)
     intent, _ = learn(demos, "pour_learned", seed=0)
-    evidence = learning_evidence(intent, demos)
+    evidence = learning_evidence(intent, demos, scene=SCENE)
     assert evidence["final_tilt_deg"] > 60.0
     assert evidence["endpoint_error_m"] < 0.05
 
@@ -222,7 +222,7 @@ def test_learning_evidence_of_the_pouring_intent():
     # The evidence function alone, on a hand-made intent: the pouring optimum ends at
     # the reference's end (within 1 cm) with the cup tilted by the scene's tilt.
     reference = intended_trajectory("unknown_skill", SCENE)
-    evidence = learning_evidence(PouringIntent.from_scene(SCENE), [reference])
+    evidence = learning_evidence(PouringIntent.from_scene(SCENE), [reference], scene=SCENE)
     assert evidence["endpoint_error_m"] < 0.01
     assert evidence["final_tilt_deg"] == pytest.approx(np.degrees(1.8), abs=3.0)
 
