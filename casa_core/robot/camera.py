@@ -25,7 +25,7 @@ Examples
 >>> (camera.yaw, camera.pitch, camera.fov)
 (-90.0, -50.0, 90.0)
 >>> bool(np.all(np.abs(camera.normalized(scene_positions(
-...     load_scene("config/scene-original.yaml")), aspect=4 / 3)) <= 1 - 2 * MARGIN))
+...     load_scene("config/scene-original.yaml")), aspect=ASPECT)) <= 1 - 2 * MARGIN))
 True
 """
 
@@ -108,9 +108,9 @@ ROLES: dict[str, tuple[float, float, float]] = {
     # From the front left, above the table.
     "figure": (75.0, -35.0, 40.0),
 }
-#: The image shape each view is fitted for, width / height: the session's window
-#: (1024 x 768) and the figure's rendering (1200 x 900).
-ASPECTS = {"window": 4 / 3, "figure": 4 / 3}
+#: The image shape both views are fitted for, width / height: the session's window
+#: (1024 x 768) and the figure's rendering (1200 x 900) are both 4:3.
+ASPECT = 4 / 3
 
 
 def scene_positions(scene: Scene) -> np.ndarray:
@@ -120,7 +120,7 @@ def scene_positions(scene: Scene) -> np.ndarray:
     )
 
 
-def fit_camera(points, role: str, *, aspect: float | None = None) -> Camera:
+def fit_camera(points, role: str) -> Camera:
     """The ``role``'s camera that frames ``points`` ``(n, 3)`` by the rule of the module.
 
     Raises
@@ -129,14 +129,13 @@ def fit_camera(points, role: str, *, aspect: float | None = None) -> Camera:
         If no distance in :data:`DISTANCE_RANGE` frames them.
     """
     yaw, pitch, fov = ROLES[role]
-    aspect = ASPECTS[role] if aspect is None else aspect
     points = np.atleast_2d(np.asarray(points, dtype=float))
     x, y, z = ((points.min(axis=0) + points.max(axis=0)) / 2).tolist()
     target = (x, y, z)
     low, high = DISTANCE_RANGE
     for step in range(round(low / DISTANCE_STEP), round(high / DISTANCE_STEP) + 1):
         camera = Camera(target, round(step * DISTANCE_STEP, 10), yaw, pitch, fov)
-        if np.all(np.abs(camera.normalized(points, aspect=aspect)) <= 1 - 2 * MARGIN):
+        if np.all(np.abs(camera.normalized(points, aspect=ASPECT)) <= 1 - 2 * MARGIN):
             return camera
     raise ValueError(f"no {role} camera within {low}-{high} m frames these positions: {points}")
 

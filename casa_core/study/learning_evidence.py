@@ -60,10 +60,9 @@ def tool_tilt_deg(scene: Scene, trajectory) -> float:
         drive = scene_drive(sim, scene)
         state = drive.start()
         dt = sim.settings.dt
-        for t in np.arange(dt, trajectory[-1, 0] + dt / 2, dt):
-            target = np.array(
-                [np.interp(t, trajectory[:, 0], column) for column in trajectory[:, 1:5].T]
-            )
+        times = np.arange(dt, trajectory[-1, 0] + dt / 2, dt)
+        targets = np.column_stack([np.interp(times, trajectory[:, 0], c) for c in trajectory.T[1:]])
+        for target in targets:
             state = drive.follow((target - state) / dt)
         _, rotation = sim.ee_pose()
     return float(np.degrees(np.arccos(np.clip(rotation[2, 0], -1.0, 1.0))))

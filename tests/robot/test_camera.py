@@ -8,6 +8,7 @@ where each position is drawn.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import shutil
@@ -17,6 +18,7 @@ import textwrap
 
 import numpy as np
 import pytest
+import yaml
 
 from casa_core.robot.camera import (
     DISTANCE_STEP,
@@ -27,7 +29,7 @@ from casa_core.robot.camera import (
     scene_camera,
     scene_positions,
 )
-from casa_core.scene import SceneError, load_scene
+from casa_core.scene import Scene, SceneError, load_scene
 from casa_core.vocabulary import VIEWS
 from tests.display import start_xvfb
 
@@ -118,8 +120,6 @@ def test_positions_no_distance_frames_are_refused_naming_the_role():
 
 
 def scene_text(view: str) -> dict:
-    import yaml
-
     data = yaml.safe_load(open("config/scene.yaml", encoding="utf-8"))
     data["view"] = yaml.safe_load(view)
     return data
@@ -135,8 +135,6 @@ def scene_text(view: str) -> dict:
     ],
 )
 def test_a_bad_view_names_its_key(view, message):
-    from casa_core.scene import Scene
-
     with pytest.raises(SceneError, match=message):
         Scene.from_dict(scene_text(view), "my-scene.yaml")
 
@@ -159,8 +157,6 @@ WINDOW_SCRIPT = textwrap.dedent(
 
 @pytest.mark.skipif(shutil.which("Xvfb") is None, reason="Xvfb is not on PATH: no display")
 def test_the_session_window_shows_every_position_of_the_authors_layout():
-    import json
-
     server, display = start_xvfb()
     try:
         run = subprocess.run(
