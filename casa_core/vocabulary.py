@@ -100,7 +100,7 @@ LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
 #: implementation's, the paper's as written.
 PRESET_NAMES = ("casa", "original", "paper")
 #: What the original implementation computed, its defects included: a replay of imported
-#: sessions, to check them against their logs (casa_core.analysis.original_numerics); not a
+#: sessions, to check them against their logs (casa_core.io.original.numerics); not a
 #: preset of the assistant and not for analysis.
 DEFECTS_PRESET = "original_defects"
 #: The presets a replay can redo: the assistant's and :data:`DEFECTS_PRESET`.
@@ -110,6 +110,8 @@ EVIDENCE = ("commanded", "executed")
 #: Where inference measures the arm: the tool point (this project's end effector) or the
 #: origin of link 7, 0.16 m before it (the original implementation's end effector).
 POINTS = ("tool", "link7")
+#: What a replay's inference steps read: a trial's recorded waypoints, or its log's ticks.
+REPLAY_PATHS = ("waypoints", "ticks")
 #: How the keys move the arm: ``held``, the tool point by a Cartesian velocity with the
 #: tool orientation held (this project's); ``original``, link 7's target by position-only
 #: inverse kinematics, the orientation following the reach (the authors' implementation).

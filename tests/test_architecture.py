@@ -61,7 +61,8 @@ MAY_IMPORT = {
     "planning": {"algebra", "words", "ground", "model", "assist", "robot"},
     "original": {"algebra", "words", "ground", "io", "robot"},
     "learning": {"algebra", "words", "ground", "model", "assist", "planning", "io"},
-    "analysis": {"algebra", "words", "ground", "model", "assist", "robot", "io", "learning"},
+    "analysis": {"algebra", "words", "ground", "model", "assist", "robot", "io", "original"}
+    | {"learning"},
     "stats": {"words", "ground", "io"},
     "figures": {"words", "ground", "io", "stats"},
     "report": {"words", "io"},

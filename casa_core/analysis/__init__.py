@@ -6,10 +6,10 @@ The modules, each with one job:
 - :mod:`~casa_core.analysis.metrics`: The user study's objective metrics (paper, Sec. V-B),
   per trial.
 - :mod:`~casa_core.analysis.replay`: Replay: offline inference over a recorded casa-trial/1 log.
+- :mod:`~casa_core.analysis.replay_intents`: The intents a replay uses: goals of the scene,
+  learned intents by name, and where the files of a participant's learned intents are found.
 - :mod:`~casa_core.analysis.replay_settings`: The settings a replay uses: preset, evidence,
-  arbitration and the point it measures.
-- :mod:`~casa_core.analysis.original_numerics`: What the original implementation computed at
-  an inference step, its defects included.
+  arbitration, the point it measures and the path its steps read.
 """
 
 from casa_core.analysis.datasets import (
@@ -39,16 +39,14 @@ from casa_core.analysis.metrics import (
     trajectory_error,
     trial_metrics,
 )
-from casa_core.analysis.replay import (
-    COLUMNS,
-    ReplayError,
+from casa_core.analysis.replay import COLUMNS, replay_differences, replay_trial
+from casa_core.analysis.replay_intents import (
+    goal_position,
     kept_intent_files,
     library_files,
-    replay_differences,
-    replay_trial,
     resolve_intents,
 )
-from casa_core.analysis.replay_settings import trial_point, trial_settings
+from casa_core.analysis.replay_settings import ReplayError, replay_path, trial_point, trial_settings
 
 __all__ = [
     "COLUMNS",
@@ -65,6 +63,7 @@ __all__ = [
     "build_tables",
     "check_dataset",
     "efficiency_cost",
+    "goal_position",
     "held_keys",
     "key_presses",
     "key_ticks",
@@ -72,6 +71,7 @@ __all__ = [
     "library_files",
     "relative_effort",
     "replay_differences",
+    "replay_path",
     "replay_trial",
     "resolve_intents",
     "task_success",

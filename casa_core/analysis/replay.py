@@ -37,165 +37,34 @@ Examples
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Sequence
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from casa_core.analysis.original_numerics import original_rows
-from casa_core.analysis.replay_settings import ReplayError, trial_point, trial_settings
+from casa_core.analysis.replay_intents import (
+    goal_position,
+    resolve_intents,
+)
+from casa_core.analysis.replay_settings import (
+    ReplayError,
+    replay_path,
+    trial_point,
+    trial_settings,
+)
 from casa_core.assist.assistant import Assistant
-from casa_core.assist.intents import GoalIntent, Intent
-from casa_core.assist.presets import DEFECTS, Preset
+from casa_core.assist.presets import DEFECTS
 from casa_core.defaults import DT, EPSILON, HORIZON
-from casa_core.io.contract import INTENT_PREFIXES, INTENT_SUFFIX, JOINTS
+from casa_core.io.contract import INTENT_PREFIXES, JOINTS
+from casa_core.io.original.numerics import original_rows
 from casa_core.robot.keys import keys_to_action, parse_keys
-from casa_core.robot.kinematics import point_position
-from casa_core.scene import KNOWN_GOALS, Scene, SceneError
+from casa_core.robot.kinematics import POINT_FRAMES, link_frames, point_position, rot_of
+from casa_core.scene import KNOWN_GOALS, Scene
 from casa_core.vocabulary import DEFECTS_PRESET
 
 #: The columns of a replay table, in order.
 COLUMNS = ("t", "intent", "suboptimality", "beta", "belief", "theta_star", "alpha", "misspecified")
-
-
-def _participant_key(name: str) -> str:
-    """A participant's name with numbers unpadded: folder ``p1`` holds participant ``p01``."""
-    return re.sub(r"\d+", lambda match: str(int(match.group())), str(name)).casefold()
-
-
-def library_files(library: Path | str | None, participant: str | None = None) -> list[Path]:
-    """The casa-intent files a replay of ``participant``'s trials may use from ``library``.
-
-    ``library`` is one ``*.intent.json`` file or a folder of them. If the folder has a
-    subfolder named after the participant (``p1`` or ``p01`` for ``p01``), only the
-    files below that subfolder are used; otherwise every file below the folder.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> root = Path(tempfile.mkdtemp())
-    >>> for part in ("p1/unknown_goal", "p2/unknown_goal"):
-    ...     (root / part).mkdir(parents=True)
-    ...     _ = (root / part / "learned_red.intent.json").write_text("{}")
-    >>> [p.relative_to(root).as_posix() for p in library_files(root, "p01")]
-    ['p1/unknown_goal/learned_red.intent.json']
-    >>> len(library_files(root)), library_files(None)
-    (2, [])
-    """
-    if library is None:
-        return []
-    library = Path(library)
-    if library.is_file():
-        return [library]
-    if participant is not None and library.is_dir():
-        key = _participant_key(participant)
-        own = [
-            p for p in sorted(library.iterdir()) if p.is_dir() and _participant_key(p.name) == key
-        ]
-        if own:
-            return sorted(path for folder in own for path in folder.rglob(f"*{INTENT_SUFFIX}"))
-    return sorted(library.rglob(f"*{INTENT_SUFFIX}"))
-
-
-def kept_intent_files(trial: Path | str, root: Path | str) -> list[Path]:
-    """The learned intents a dataset keeps for a trial: its participant's library.
-
-    The casa-intent files below the nearest folder that has any, from the trial's own
-    folder up to its top folder below ``root`` (the dataset folder; ``root`` itself for
-    a trial at the top): a participant's intents live in the participant's folder,
-    wherever below it (``casa session`` keeps them in ``.session/library/``, the
-    simulated study in ``intents/<task>/``), and never serve another participant.
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> root = Path(tempfile.mkdtemp())
-    >>> for part in ("p1/before", "p1/.session/library", "p2/before"):
-    ...     (root / part).mkdir(parents=True)
-    >>> _ = (root / "p1/.session/library/learned_red.intent.json").write_text("{}")
-    >>> [p.relative_to(root).as_posix() for p in kept_intent_files(root / "p1/before/t.csv", root)]
-    ['p1/.session/library/learned_red.intent.json']
-    >>> kept_intent_files(root / "p2/before/t.csv", root)
-    []
-    """
-    root = Path(root)
-    folder = Path(trial).parent
-    while True:
-        found = sorted(folder.rglob(f"*{INTENT_SUFFIX}"))
-        if found or folder == root or folder.parent == root or root not in folder.parents:
-            return found
-        folder = folder.parent
-
-
-def resolve_intents(
-    names: Sequence[str],
-    scene: Scene,
-    chosen: Preset,
-    learned: Sequence = (),
-    *,
-    point: str | None = None,
-) -> list[Intent]:
-    """The intents called ``names``: goals of the scene, else learned intents by name.
-
-    A goal's cost is the preset's, its position the scene's at ``point`` (default the
-    scene's own point; a scene that does not give it there is a ReplayError).
-    ``learned`` holds casa-intent files (the file of intent NAME is ``NAME.intent.json``,
-    read only when NAME is needed, a fresh intent each time) or intents already built.
-
-    Raises
-    ------
-    ReplayError
-        Naming an intent that is neither a goal nor in ``learned``, or given twice.
-
-    Examples
-    --------
-    >>> from casa_core.scene import load_scene
-    >>> from casa_core.assist.presets import preset
-    >>> [i.name for i in resolve_intents(["purple", "green"], load_scene(), preset())]
-    ['purple', 'green']
-    >>> try:
-    ...     resolve_intents(["learned_red"], load_scene(), preset())
-    ... except ReplayError as error:
-    ...     print(error)  # doctest: +NORMALIZE_WHITESPACE
-    intent 'learned_red' is not a goal of the scene (green, purple, red)
-    nor a learned intent given (none)
-    """
-    built = {item.name: item for item in learned if isinstance(item, Intent)}
-    files: dict[str, list[Path]] = {}
-    for item in learned:
-        if not isinstance(item, Intent):
-            path = Path(item)
-            files.setdefault(path.name.removesuffix(INTENT_SUFFIX), []).append(path)
-    intents: list[Intent] = []
-    for name in names:
-        if name in scene.goals:
-            position = _goal_at(scene, name, point)
-            intents.append(GoalIntent(name, position, **chosen.goal_options()))
-        elif name in built:
-            intents.append(built[name])
-        elif len(files.get(name, ())) == 1:
-            intents.append(_load_learned(files[name][0], name))
-        elif name in files:
-            found = ", ".join(str(p) for p in files[name])
-            raise ReplayError(f"intent {name!r} is in several files ({found}); give one")
-        else:
-            known = ", ".join(sorted({*built, *files})) or "none"
-            raise ReplayError(
-                f"intent {name!r} is not a goal of the scene ({', '.join(scene.goals)}) "
-                f"nor a learned intent given ({known})"
-            )
-    return intents
-
-
-def _load_learned(path: Path, name: str) -> Intent:
-    from casa_core.learning.library import load_intent  # torch loads only when a trial needs it
-
-    entry = load_intent(path)
-    if entry.intent.name != name:
-        raise ReplayError(f"{path} holds intent {entry.intent.name!r}, not {name!r}")
-    return entry.intent
 
 
 def replay_trial(
@@ -207,6 +76,7 @@ def replay_trial(
     evidence: str | None = None,
     arbitration: str | None = None,
     point: str | None = None,
+    path: str | None = None,
     lam: float | None = None,
     epsilon: float = EPSILON,
     intents: Sequence[str] | None = None,
@@ -223,11 +93,16 @@ def replay_trial(
     preset, evidence, arbitration : str, optional
         Default: the trial's own (:func:`trial_settings`). The preset
         :data:`~casa_core.vocabulary.DEFECTS_PRESET` redoes the original's numerics with
-        their defects (:mod:`casa_core.analysis.original_numerics`) over the scene's goals.
+        their defects (:mod:`casa_core.io.original.numerics`) over the scene's goals.
     point : {"tool", "link7"}, optional
         Where the arm is measured (:func:`trial_point`), with the scene's goals at that
         point: the log's positions where they were measured there (the scene's
         ``point``), else that point of the logged joint angles.
+    path : {"waypoints", "ticks"}, optional
+        What the steps' evidence is read from (:func:`replay_path`): the trial's recorded
+        waypoints, each step at its logged start over the waypoints it ran over, or the
+        log's state every ``dt``. Default: the waypoints where the trial has them and the
+        evidence is the executed path.
     lam : float, optional
         Rate of the prior on beta; default the preset's.
     epsilon : float, default EPSILON
@@ -242,7 +117,8 @@ def replay_trial(
     -------
     pandas.DataFrame
         :data:`COLUMNS`: one row per inference step and intent, in step order, then the
-        intents' order; ``t`` is the log's time of the step; ``alpha``, ``theta_star``
+        intents' order; ``t`` is the log's time of the step (its start, on the
+        waypoints); ``alpha``, ``theta_star``
         and ``misspecified`` repeat over a step's rows.
 
     Raises
@@ -255,6 +131,7 @@ def replay_trial(
         meta, preset=preset, evidence=evidence, arbitration=arbitration
     )
     point = trial_point(meta, point)
+    on_waypoints = replay_path(meta, chosen, path) == "waypoints"
     names = intents if intents is not None else meta.get("intents") or list(KNOWN_GOALS)
     teleop = scene.teleop
     per_step = int(round(DT / teleop.dt))
@@ -264,13 +141,20 @@ def replay_trial(
     states = _measured_states(frame, point, scene.point)
     # The tick of each row (t = tick * dt); inference runs at each multiple of per_step.
     ticks = np.rint(t / teleop.dt).astype(int)
+    recorded: Any = meta.get("inference_steps")
+    if on_waypoints:
+        logged = list(zip(recorded["started"], recorded["waypoint"], strict=True))
+        path_states = _waypoint_states(recorded["waypoints"], point)
+    else:
+        logged, path_states = _tick_steps(t, ticks, per_step, states, recorded)
     if chosen is DEFECTS:
         if lam is not None:
             raise ReplayError(f"preset {DEFECTS_PRESET} has the original's lambda; give no lam")
         chosen_goals = _defect_goals(scene, list(names), point)
-        return _replay_defects(
-            t, ticks, per_step, states, chosen_goals, list(names), arbitration, epsilon
+        steps = original_rows(
+            logged, path_states[:, :3], chosen_goals, list(names), arbitration, epsilon
         )
+        return pd.DataFrame(steps, columns=list(COLUMNS))
     built = resolve_intents(list(names), scene, chosen, learned, point=point)
     options = chosen.assistant_options()
     if lam is not None:
@@ -286,6 +170,10 @@ def replay_trial(
         **options,
     )
     keys = frame["keys"].fillna("").astype(str).tolist()
+    if on_waypoints:
+        return pd.DataFrame(
+            _replay_waypoints(assistant, path_states, logged, t, keys), columns=list(COLUMNS)
+        )
     applied = frame["alpha"].to_numpy(dtype=float) if "alpha" in frame else np.ones(len(t))
     rows: list[dict] = []
     assistant.reset(states[0])
@@ -294,25 +182,76 @@ def replay_trial(
         tick = int(ticks[i])
         if i > 0 and tick > 0 and tick % per_step == 0 and tick not in done:
             done.add(tick)
-            step = assistant.update(states[i])
-            for name in assistant.names:
-                rows.append(
-                    {
-                        "t": float(t[i]),
-                        "intent": name,
-                        "suboptimality": step.suboptimality[name],
-                        "beta": step.beta[name],
-                        "belief": step.belief[name],
-                        "theta_star": step.intent,
-                        "alpha": step.alpha,
-                        "misspecified": step.misspecified,
-                    }
-                )
+            rows += _step_rows(float(t[i]), assistant.update(states[i]), assistant.names)
         if i + 1 < len(t):  # the closed loop acts after every row but the last
             action = keys_to_action(parse_keys(keys[i]), teleop.speed, teleop.rot_speed)
             elapsed = (tick % per_step) * teleop.dt
             assistant.act(states[i], action, elapsed_in_step=elapsed, alpha=applied[i])
     return pd.DataFrame(rows, columns=list(COLUMNS))
+
+
+def _step_rows(t: float, step, names) -> list[dict]:
+    """The replay rows of one inference step, one per intent."""
+    return [
+        {
+            "t": t,
+            "intent": name,
+            "suboptimality": step.suboptimality[name],
+            "beta": step.beta[name],
+            "belief": step.belief[name],
+            "theta_star": step.intent,
+            "alpha": step.alpha,
+            "misspecified": step.misspecified,
+        }
+        for name in names
+    ]
+
+
+def _tick_steps(t, ticks, per_step, states, recorded) -> tuple[list, np.ndarray]:
+    """The steps ``(t, w)`` and the path of the log's state every ``dt``: waypoint w at the
+    first row of tick ``w * per_step``. The trial's logged steps where it has them
+    (``inference_steps``), else one at every ``dt``, at most the horizon's worth."""
+    first = {int(tick): i for i, tick in reversed(list(enumerate(ticks)))}
+    if isinstance(recorded, dict):
+        logged = list(zip(recorded["started"], recorded["waypoint"], strict=True))
+        last = max((w for _, w in logged), default=0)
+        missing = [w for w in range(last + 1) if w * per_step not in first]
+        if missing:
+            raise ReplayError(
+                f"the log has no tick at t = {missing[0] * DT:g} s (waypoint "
+                f"{missing[0]} of its inference steps)"
+            )
+        index = [first[w * per_step] for w in range(last + 1)]
+        return logged, states[index]
+    index = [i for tick, i in sorted(first.items()) if tick > 0 and tick % per_step == 0]
+    index = index[: int(round(HORIZON / DT))]
+    logged = [(float(t[i]), k) for k, i in enumerate(index, start=1)]
+    return logged, states[[0, *index]]
+
+
+def _replay_waypoints(assistant: Assistant, states, logged, t, keys) -> list[dict]:
+    """The assistant fed the recorded waypoints, one inference step each; a row for each
+    logged step, at its start. Waypoint j's step has user input when a key was held on a
+    tick in ((j - 1) dt, j dt]."""
+    held = np.array([bool(cell.strip()) for cell in keys])
+    at = {w: start for start, w in logged}
+    rows: list[dict] = []
+    assistant.reset(states[0])
+    for j in range(1, max(at, default=0) + 1):
+        interval = (t > (j - 1) * DT + 1e-9) & (t <= j * DT + 1e-9)
+        step = assistant.update(states[j], user_input=bool(held[interval].any()))
+        if j in at:
+            rows += _step_rows(float(at[j]), step, assistant.names)
+    return rows
+
+
+def _waypoint_states(waypoints, point: str) -> np.ndarray:
+    """The states ``[x, y, z, rot]`` at ``point`` of recorded waypoints (joint angles)."""
+    q = np.asarray(waypoints, dtype=float)
+    frames = [link_frames(row) for row in q]
+    position = np.array([frame[POINT_FRAMES[point]][:3, 3] for frame in frames])
+    rot = np.unwrap([rot_of(frame[-1][:3, :3]) for frame in frames])
+    return np.column_stack([position, rot])
 
 
 def _measured_states(frame: pd.DataFrame, point: str, logged: str) -> np.ndarray:
@@ -336,33 +275,15 @@ def _defect_goals(scene: Scene, names: list[str], point: str) -> np.ndarray:
             f"preset {DEFECTS_PRESET} redoes goals only: {unknown[0]!r} is not a goal of the "
             "scene (the original's learned costs are not in its sessions)"
         )
-    return np.array([_goal_at(scene, name, point) for name in names])
-
-
-def _goal_at(scene: Scene, name: str, point: str | None) -> np.ndarray:
-    """Goal ``name``'s position at ``point``; ReplayError when the scene does not give it."""
-    try:
-        return scene.goal(name, point)
-    except SceneError as error:
-        raise ReplayError(f"measured at {point}: {error}") from None
-
-
-def _replay_defects(t, ticks, per_step, states, goals, names, arbitration, epsilon):
-    """The original's numerics, defects included, at each inference tick of the log."""
-    # The inference ticks, at most the horizon's worth: the original's waypoints after the start.
-    first = {int(tick): i for i, tick in reversed(list(enumerate(ticks))) if i > 0}
-    steps = [i for tick, i in sorted(first.items()) if tick > 0 and tick % per_step == 0]
-    steps = steps[: int(round(HORIZON / DT))]
-    index = [0, *steps]
-    rows = original_rows(t[index], states[index, :3], goals, names, arbitration, epsilon)
-    return pd.DataFrame(rows, columns=list(COLUMNS))
+    return np.array([goal_position(scene, name, point) for name in names])
 
 
 def replay_differences(frame: pd.DataFrame, replayed: pd.DataFrame) -> dict:
     """The largest absolute difference between a log's inference and its replay.
 
     Compares the log's ``beta:NAME``, ``belief:NAME`` and ``alpha`` at the replay's
-    steps (matched on ``t``) with the replay, over the intents both have.
+    steps (each at the first tick at or after the step's ``t``, where the log holds its
+    result) with the replay, over the intents both have.
 
     Returns
     -------
@@ -381,18 +302,27 @@ def replay_differences(frame: pd.DataFrame, replayed: pd.DataFrame) -> dict:
     result = dict.fromkeys(("beta", "belief", "alpha"), math.nan)
     if replayed.empty:
         return result
-    logged = frame.drop_duplicates("t").set_index("t")
+    logged = frame.drop_duplicates("t").reset_index(drop=True)
+    times = logged["t"].to_numpy(dtype=float)
+
+    def held(column: str, steps: pd.Series) -> np.ndarray:
+        # A step's result is on the log from the first tick at or after its start.
+        index = np.searchsorted(times, steps.to_numpy(dtype=float) - 1e-9, side="left")
+        values = np.full(len(index), math.nan)
+        inside = index < len(times)
+        values[inside] = logged[column].to_numpy(dtype=float)[index[inside]]
+        return values
+
     for what in INTENT_PREFIXES:
         gaps = []
         for name, rows in replayed.groupby("intent", sort=False):
             column = f"{what}:{name}"
             if column in logged.columns:
-                values = logged[column].reindex(rows["t"].to_numpy()).to_numpy(dtype=float)
-                gaps.append(np.abs(values - rows[what].to_numpy(dtype=float)))
+                gaps.append(np.abs(held(column, rows["t"]) - rows[what].to_numpy(dtype=float)))
         if gaps:
             result[what] = float(np.max(np.concatenate(gaps)))
     if "alpha" in logged.columns:
         steps = replayed.drop_duplicates("t")
-        values = logged["alpha"].reindex(steps["t"].to_numpy()).to_numpy(dtype=float)
-        result["alpha"] = float(np.max(np.abs(values - steps["alpha"].to_numpy(dtype=float))))
+        gaps = np.abs(held("alpha", steps["t"]) - steps["alpha"].to_numpy(dtype=float))
+        result["alpha"] = float(np.max(gaps))
     return result

@@ -1,4 +1,5 @@
-"""The settings a replay uses: preset, evidence, arbitration and the point it measures.
+"""The settings a replay uses: preset, evidence, arbitration, the point it measures and the
+path its steps read.
 
 Each is the trial's own (its metadata) unless given; :mod:`casa_core.analysis.replay`
 redoes the inference with them.
@@ -11,7 +12,7 @@ from typing import Any
 from casa_core.assist.assistant import ARBITRATIONS
 from casa_core.assist.presets import DEFAULT_PRESET, DEFECTS, Preset
 from casa_core.assist.presets import preset as named_preset
-from casa_core.vocabulary import DEFECTS_PRESET, METHOD_ARBITRATION, POINTS
+from casa_core.vocabulary import DEFECTS_PRESET, METHOD_ARBITRATION, POINTS, REPLAY_PATHS
 
 
 class ReplayError(ValueError):
@@ -80,3 +81,39 @@ def trial_point(meta: dict, point: str | None = None) -> str:
     if point not in POINTS:
         raise ReplayError(f"point must be one of {', '.join(POINTS)}: {point!r}")
     return point
+
+
+def replay_path(meta: dict, chosen: Preset, path: str | None = None) -> str:
+    """What a replay's steps read: ``"waypoints"`` or ``"ticks"``.
+
+    ``"waypoints"``: the trial's recorded waypoints (``meta["inference_steps"]``, written
+    by ``casa import original``), each step at its logged start over the waypoints it ran
+    over; ``"ticks"``: the log's state every ``dt``. Default: the waypoints where the trial
+    has them and the preset's evidence is the executed path (commanded evidence needs the
+    keys of every tick), else the ticks.
+
+    Examples
+    --------
+    >>> from casa_core.assist.presets import preset
+    >>> meta = {"inference_steps": {"started": [0.5], "waypoint": [1],
+    ...                             "waypoints": [[0.0] * 7, [0.1] * 7]}}
+    >>> replay_path(meta, preset("original")), replay_path(meta, preset("casa"))
+    ('waypoints', 'ticks')
+    >>> replay_path({}, preset("original")), replay_path(meta, preset("original"), "ticks")
+    ('ticks', 'ticks')
+    """
+    if path is not None and path not in REPLAY_PATHS:
+        raise ReplayError(f"path must be one of {', '.join(REPLAY_PATHS)}: {path!r}")
+    steps = meta.get("inference_steps")
+    recorded = isinstance(steps, dict) and "waypoints" in steps
+    if path == "waypoints":
+        if not recorded:
+            raise ReplayError("path waypoints: the trial has no recorded waypoints")
+        if chosen.evidence != "executed":
+            raise ReplayError(
+                f"path waypoints: evidence {chosen.evidence} needs the user's keys of every "
+                "tick; the waypoints are the executed path"
+            )
+    if path is None:
+        path = "waypoints" if recorded and chosen.evidence == "executed" else "ticks"
+    return path

@@ -126,7 +126,7 @@ PRESETS = {
 #: The preset used when none is named.
 DEFAULT_PRESET = "casa"
 #: The settings of a replay that redoes the original's numerics with their defects
-#: (casa_core.analysis.original_numerics): the ``original`` preset's, named apart. Not in
+#: (casa_core.io.original.numerics): the ``original`` preset's, named apart. Not in
 #: :data:`PRESETS`: the assistant never runs it.
 DEFECTS = replace(PRESETS["original"], name=DEFECTS_PRESET)
 

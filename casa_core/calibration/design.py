@@ -3,9 +3,10 @@
 :func:`read_people` checks a dataset folder (:func:`casa_core.io.check_paths`), keeps the
 trials whose ``source`` is ``human`` and that the simulator can run again, and returns them
 as a :class:`Design` (what to simulate) with the people's summaries
-(:mod:`casa_core.calibration.summaries`). A trial after learning is left out with a
-warning: it ran with intents learned from that person's demonstrations, which a simulated
-operator does not have.
+(:mod:`casa_core.calibration.summaries`). Left out, each with a warning naming the file: a
+trial flagged as not the person's own behaviour (``no-user-command``: the robot drove), and
+a trial after learning, which ran with intents learned from that person's demonstrations,
+which a simulated operator does not have.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import pandas as pd
 from casa_core.assist import tasks
 from casa_core.calibration.summaries import SUMMARIES, trial_summaries
 from casa_core.io import check_paths
+from casa_core.io.contract import NOT_OWN_BEHAVIOUR, TRIAL_FLAGS
 from casa_core.scene import Scene
 
 #: The phases the simulator runs with the robot's known intents only.
@@ -112,6 +114,12 @@ def read_people(raw_dir: Path | str, scene: Scene, *, max_duration: float) -> Pe
     for check in sorted(human, key=lambda c: str(c.file)):
         meta, frame = check.meta, check.frame
         assert meta is not None and frame is not None
+        excluded = [flag for flag in meta.get("flags", ()) if flag in NOT_OWN_BEHAVIOUR]
+        if excluded:
+            warnings.append(
+                f"{check.file}: left out, flagged {excluded[0]}: {TRIAL_FLAGS[excluded[0]]}"
+            )
+            continue
         if meta["phase"] not in SIMULATED_PHASES:
             warnings.append(
                 f"{check.file}: left out, phase {meta['phase']!r} ran with intents learned "

@@ -8,6 +8,7 @@ from pathlib import Path
 from casa_core import vocabulary
 from casa_core.cli._errors import fail
 from casa_core.cli._options import dataset_scene, example, nonnegative_float, positive_float
+from casa_core.io.contract import NO_LOGGED_INFERENCE
 
 #: The columns of ``replay.csv``, one row per trial.
 SUMMARY_COLUMNS = [
@@ -19,6 +20,7 @@ SUMMARY_COLUMNS = [
     "preset",
     "evidence",
     "point",
+    "path",
     "arbitration",
     "steps",
     "max_diff_beta",
@@ -64,6 +66,13 @@ def register(commands) -> None:
         choices=vocabulary.POINTS,
         help="where the arm is measured: the tool point or link 7 (from the joint angles; "
         "default: the trial's own, else tool)",
+    )
+    command.add_argument(
+        "--path",
+        choices=vocabulary.REPLAY_PATHS,
+        help="what the steps' evidence is read from: the trial's recorded waypoints (imported "
+        "sessions) or the log's state every 0.5 s (default: the waypoints where the trial has "
+        "them and the evidence is the executed path)",
     )
     command.add_argument(
         "--arbitration", help="confidence, distance, belief or none (default: the method's)"
@@ -172,12 +181,8 @@ def _collect(paths) -> tuple[list[dict], list, list[str]]:
 
 
 def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
-    from casa_core.analysis.replay import (
-        replay_differences,
-        replay_trial,
-        trial_point,
-        trial_settings,
-    )
+    from casa_core.analysis.replay import replay_differences, replay_trial
+    from casa_core.analysis.replay_settings import replay_path, trial_point, trial_settings
     from casa_core.figures.replay import replay_figure
     from casa_core.figures.style import save_figure
     from casa_core.io import write_csv
@@ -197,8 +202,13 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
             meta, preset=args.preset, evidence=args.evidence, arbitration=args.arbitration
         )
         point = trial_point(meta, args.point)
+        path = replay_path(meta, chosen, args.path)
         row.update(
-            preset=chosen.name, evidence=chosen.evidence, point=point, arbitration=arbitration
+            preset=chosen.name,
+            evidence=chosen.evidence,
+            point=point,
+            path=path,
+            arbitration=arbitration,
         )
         replayed = replay_trial(
             meta,
@@ -208,6 +218,7 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
             evidence=args.evidence,
             arbitration=args.arbitration,
             point=point,
+            path=path,
             lam=args.lam,
             epsilon=epsilon,
             learned=_learned(trial, args.intents, meta["participant"]),
@@ -223,14 +234,21 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
     )
     fig = replay_figure(replayed, epsilon=epsilon, title=title)
     save_figure(fig, figures / stem.parent / f"{stem.name}.replay", formats=("png",))
-    differences = replay_differences(check.frame, replayed)
-    row.update({f"max_diff_{key}": value for key, value in differences.items()})
-    return {**row, "steps": int(replayed["t"].nunique()), "status": "replayed", "reason": ""}
+    reason = ""
+    if NO_LOGGED_INFERENCE in meta.get("flags", ()):
+        reason = (
+            f"nothing compared: the trial is flagged {NO_LOGGED_INFERENCE}, its log holds no "
+            "inference result to compare with"
+        )
+    else:
+        differences = replay_differences(check.frame, replayed)
+        row.update({f"max_diff_{key}": value for key, value in differences.items()})
+    return {**row, "steps": int(replayed["t"].nunique()), "status": "replayed", "reason": reason}
 
 
 def _learned(trial: dict, intents: str | None, participant: str) -> list[Path]:
     """``--intents`` when given, else the intents the dataset keeps for the trial."""
-    from casa_core.analysis.replay import kept_intent_files, library_files
+    from casa_core.analysis.replay_intents import kept_intent_files, library_files
 
     if intents is not None:
         return library_files(intents, participant)

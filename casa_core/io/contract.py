@@ -48,6 +48,10 @@ __all__ = [
     "META_ENUMS",
     "META_OPTIONAL",
     "TRIAL_FLAGS",
+    "NOT_OWN_BEHAVIOUR",
+    "NO_LOGGED_INFERENCE",
+    "NO_USER_COMMAND",
+    "INFERENCE_STEPS_KEYS",
     "META_REQUIRED",
     "METHODS",
     "PHASES",
@@ -80,13 +84,33 @@ INTENT_SUFFIX = ".intent.json"
 
 #: Metadata keys every trial has, and the ones it may have.
 META_REQUIRED = ("schema", "participant", "task", "method", "phase", "source")
-META_OPTIONAL = ("intents", "seed", "started_at", "notes", "max_duration", "inference", "flags")
+META_OPTIONAL = (
+    "intents",
+    "seed",
+    "started_at",
+    "notes",
+    "max_duration",
+    "inference",
+    "inference_steps",
+    "flags",
+)
+#: The flag of a trial in which the robot drove: the user's command is zero throughout.
+NO_USER_COMMAND = "no-user-command"
+#: The flag of a trial whose log holds no inference result (a replay compares nothing).
+NO_LOGGED_INFERENCE = "no-logged-inference"
 #: The flags a trial's metadata may carry (``"flags": [...]``), each with what it says.
 TRIAL_FLAGS = {
-    "no-user-command": "the user's command is zero throughout while the arm moves: the robot "
+    NO_USER_COMMAND: "the user's command is zero throughout while the arm moves: the robot "
     "drove, so the trial is not a person's own behaviour (analyses of people's behaviour, "
     "such as calibrating simulated participants, leave it out)",
+    NO_LOGGED_INFERENCE: "the recording holds no inference result (the original's NA and "
+    "PBA sessions logged the prior on every row): the log has no belief or beta columns, "
+    "its alpha is recomputed by the method's rule, and a replay has nothing to compare",
 }
+#: The flags that leave a trial out of analyses of people's behaviour (calibration).
+NOT_OWN_BEHAVIOUR = (NO_USER_COMMAND,)
+#: The keys of the metadata's ``inference_steps``, the required ones first.
+INFERENCE_STEPS_KEYS = ("started", "waypoint", "waypoints", "after_trial")
 #: A trial's two files: ``<stem>.json`` (its metadata) and ``<stem>.csv`` (its ticks).
 TRIAL_SUFFIXES = (".json", ".csv")
 #: A dataset's own scene: this file at the dataset's top level (docs/data-contracts.md).

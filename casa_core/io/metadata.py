@@ -18,6 +18,9 @@ import unicodedata
 from collections.abc import Callable
 
 from casa_core.io.contract import (
+    INFERENCE_STEPS_KEYS,
+    INTENT_PREFIXES,
+    JOINTS,
     META_ENUMS,
     META_OPTIONAL,
     META_REQUIRED,
@@ -129,6 +132,66 @@ def _inference(value, meta: dict) -> str | None:
     return None
 
 
+def _finite(value) -> bool:
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    return number and math.isfinite(value)
+
+
+def _index(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _increasing(values) -> bool:
+    return all(b > a for a, b in zip(values, values[1:], strict=False))
+
+
+def _inference_steps(value, meta: dict) -> str | None:
+    if not isinstance(value, dict) or not {"started", "waypoint"} <= set(value):
+        return "expected an object with the keys started and waypoint"
+    unknown = sorted(set(value) - set(INFERENCE_STEPS_KEYS))
+    if unknown:
+        return f"{unknown[0]!r} is not a key of it; allowed: {', '.join(INFERENCE_STEPS_KEYS)}"
+    started, at = value["started"], value["waypoint"]
+    if not (isinstance(started, list) and all(_finite(t) and t >= 0 for t in started)):
+        return "started: expected a list of times in seconds, each >= 0"
+    if not (isinstance(at, list) and all(_index(w) and w >= 1 for w in at)):
+        return "waypoint: expected a list of waypoint indices, each >= 1"
+    if len(at) != len(started):
+        return f"waypoint has {len(at)} entries, started {len(started)}: one per step"
+    if not (_increasing(started) and _increasing(at)):
+        return "started and waypoint must strictly increase: each step after the last"
+    waypoints = value.get("waypoints")
+    if waypoints is not None:
+        rows = isinstance(waypoints, list) and len(waypoints) >= 2
+        if not rows or not all(
+            isinstance(row, list) and len(row) == len(JOINTS) and all(map(_finite, row))
+            for row in waypoints
+        ):
+            return f"waypoints: expected 2 or more lists of {len(JOINTS)} joint angles (rad)"
+        if at and at[-1] >= len(waypoints):
+            return f"waypoint {at[-1]} of the last step is not among the {len(waypoints)} waypoints"
+    after = value.get("after_trial")
+    if after is None:
+        return None
+    if not isinstance(after, dict) or not set(after) <= {"waypoint", *INTENT_PREFIXES}:
+        return "after_trial: expected an object with the keys waypoint, beta and belief"
+    if "waypoint" in after and not _index(after["waypoint"]):
+        return "after_trial: waypoint must be a waypoint index"
+    if "waypoint" in after and waypoints is not None and after["waypoint"] >= len(waypoints):
+        return f"after_trial: waypoint {after['waypoint']} is not among the {len(waypoints)}"
+    intents = meta.get("intents") if isinstance(meta.get("intents"), list) else None
+    for key in INTENT_PREFIXES:
+        values = after.get(key, {})
+        if not isinstance(values, dict) or not all(
+            v is None or _finite(v) for v in values.values()
+        ):
+            return f"after_trial: {key} must map intent names to numbers (or null)"
+        stray = [name for name in values if intents is not None and name not in intents]
+        if stray:
+            return f"after_trial: {key} names {stray[0]!r}, which is not in intents"
+    return None
+
+
 def _flags(value, meta: dict) -> str | None:
     if not (isinstance(value, list) and all(isinstance(flag, str) for flag in value)):
         return "expected a list of flags"
@@ -153,6 +216,7 @@ META_RULES: tuple[tuple[str, str, MetaCheck], ...] = (
     ("max_duration", "positive-number", _positive_number),
     ("seed", "integer", _integer),
     ("inference", "inference-settings", _inference),
+    ("inference_steps", "inference-steps", _inference_steps),
     ("flags", "trial-flags", _flags),
 )
 

@@ -66,14 +66,19 @@ def imported_operators(tmp_path_factory):
         result = run_trial(
             scene, "known_goal", method, source, participant="P07", max_duration=15.0, seed=7
         )
-        arrays = session_of_trial(result.frame, ["green", "purple"])
+        arrays = session_of_trial(result.frame, ["green", "purple"], logged=method == "CASA")
         np.savez(folder / f"task1{letter}_data.npz", **arrays)
+        if method == "NA":  # the same path with no user command: a session the robot drove
+            drove = arrays | {"joy_cmd": np.zeros_like(arrays["joy_cmd"])}
+            np.savez(folder / "task4a_data.npz", **drove)
     out = root / "raw" / "authors"
     assert main(["import", "original", str(folder), "--out", str(out)]) == 0
     return out, result.frame
 
 
-def test_an_imported_dataset_of_the_authors_setup_gives_a_population(imported_operators, tmp_path):
+def test_an_imported_dataset_of_the_authors_setup_gives_a_population(
+    imported_operators, tmp_path, capsys
+):
     raw, casa_trial = imported_operators
     meta, frame = read_trial(raw / "P07" / "task1c")
     # The import gives back what the operator did: its keys and its link-7 path.
@@ -82,7 +87,13 @@ def test_an_imported_dataset_of_the_authors_setup_gives_a_population(imported_op
     assert abs(frame[path].to_numpy() - casa_trial[path].to_numpy()).max() < 1e-6
     assert meta["inference"]["point"] == "link7"
     out = tmp_path / "authors.json"
+    capsys.readouterr()
     assert main(["calibrate", str(raw), "--out", str(out), *SMALL]) == 0
+    # The session the robot drove is imported flagged, and calibration leaves it out, naming it.
+    assert "no-user-command" in json.loads((raw / "P07" / "task4a.json").read_text())["flags"]
+    assert f"{raw / 'P07' / 'task4a.csv'}: left out, flagged no-user-command" in (
+        capsys.readouterr().err
+    )
     assert read_population(out)["dataset"] == "authors"
     table = pd.read_csv(out.with_name("authors_predictive.csv"), keep_default_na=False)
     assert sorted(set(table["method"])) == ["CASA", "NA", "PBA"]

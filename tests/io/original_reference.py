@@ -21,6 +21,15 @@ one every 0.5 s); goal ``gi`` is at ``G_gi``, goal 0 is ``G_0``.
   PBA uses the belief at ``beta = 1`` for every goal and ``clip(|w_i - G*| / 0.55, 0, 1)``
   for its most likely goal ``G*``; NA ``1``. ``argmax`` is ``np.argmax``: first index on
   ties, and the first nan if the belief has one (so an all-nan belief picks goal 0).
+
+The session's rows (NOTES section 4, corrected 2026-12-06): waypoint ``j`` is recorded at
+``0.5 j`` s; timed step ``k`` starts when its waypoint ``w_k`` is recorded (``w_k = k + 1``
+unless a step ran late) and runs over waypoints ``0..w_k``; the last row is the final step
+after the trial, over every waypoint, each goal charged its own pose penalty of 100 per
+metre from the last waypoint and no cost to go: ``S = (C(w_0..w_n) + 100 |w_n - G| -
+C(w_0, G)) / 1.8`` at ``i = n + 1`` (the original's ``len(traj_hist)``), not clamped, so a
+trial that ends short of a goal gives it a negative beta. A method without betas (NA,
+PBA: the joint table was never saved) logs the uniform prior on every row.
 """
 
 from __future__ import annotations
@@ -109,30 +118,51 @@ def alpha(result, waypoint, goals, i, *, defects: bool, method: str) -> tuple[fl
     raise ValueError(f"method must be one of {METHODS}, not {method!r}")
 
 
-def histories(waypoints, goals, *, defects: bool, method: str) -> dict:
-    """One row per step ``i = 0..m``: ``sub``, ``beta`` (MAP), ``belief`` (the method's)
-    ``(m+1, g)`` and ``alpha`` ``(m+1,)``."""
+def final_step(waypoints, goals, *, defects: bool) -> dict:
+    """``{"sub", "beta", "belief"}`` of the step after the trial, over every waypoint."""
+    w = np.asarray(waypoints, dtype=float)
+    goals = np.asarray(goals, dtype=float)
+    i = len(w)
+    penalty = POSE_PENALTY_PER_METRE * np.linalg.norm(goals - w[-1], axis=1)
+    optimal = np.array([path_cost([w[0], goal]) for goal in goals])
+    sub = (path_cost(w) + penalty - optimal) / SUB_SCALE
+    if not defects:
+        sub = np.maximum(sub, 0.0)
+    beta = map_beta(sub, i, defects=defects)
+    return {"sub": sub, "beta": beta, "belief": belief(sub, beta, i, defects=defects)}
+
+
+def histories(waypoints, goals, *, defects: bool, method: str, at=None) -> dict:
+    """The logged rows: timed step ``k`` over ``waypoints[0..at[k]]`` (default ``at`` =
+    1..n-1 for waypoints 0..n), then the final step: ``sub``, ``beta`` (MAP), ``belief``
+    (the method's) ``(m+1, g)``; ``alpha`` ``(m,)`` of the timed steps."""
     waypoints = np.asarray(waypoints, dtype=float)
+    at = range(1, len(waypoints) - 1) if at is None else at
     rows = {"sub": [], "beta": [], "belief": [], "alpha": []}
-    for i in range(len(waypoints)):
+    for i in at:
         result = step(waypoints, goals, i, defects=defects)
         share, used = alpha(result, waypoints[i], goals, i, defects=defects, method=method)
         rows["sub"].append(result["sub"])
         rows["beta"].append(result["beta"])
         rows["belief"].append(used)
         rows["alpha"].append(share)
+    final = final_step(waypoints, goals, defects=defects)
+    for key in ("sub", "beta", "belief"):
+        rows[key].append(final[key])
     return {key: np.array(value, dtype=float) for key, value in rows.items()}
 
 
-def session_of_trial(frame, names, *, speed=0.05, rot_speed=0.5) -> dict:
+def session_of_trial(frame, names, *, logged=True, speed=0.05, rot_speed=0.5) -> dict:
     """The original-format arrays of a casa trial measured at link 7 (``names``: its goals).
 
     A key's command ``joy_cmd`` is the joint velocity that moves link 7 at the key's
     velocity (``speed`` along its axis; the pseudo-inverse of link 7's Jacobian), plus
     ``rot_speed`` on joint 7 for a rotate key (``rot+`` backwards), so that the importer's
-    reading of keys from ``joy_cmd`` gives the trial's keys back. The inference rows are the
-    trial's betas and beliefs every 0.5 s (10 ticks), row 0 at t = 0, which
-    ``inf_start_time`` does not time.
+    reading of keys from ``joy_cmd`` gives the trial's keys back. The waypoints
+    ``traj_hist`` are the joint angles every 0.5 s (10 ticks); timed step k at waypoint
+    k + 1 holds the trial's betas and beliefs there, the last waypoint the final step
+    (the trial's last values). Without ``logged`` (NA, PBA) the beliefs are the uniform
+    prior on every row and there are no betas.
     """
     from casa_core.robot.keys import KEY_DIRECTIONS, parse_keys
     from casa_core.robot.kinematics import jacobian
@@ -146,14 +176,19 @@ def session_of_trial(frame, names, *, speed=0.05, rot_speed=0.5) -> dict:
             link7 = jacobian(angles, "link7")[:3]
             commands[row] = np.linalg.pinv(link7) @ (speed * direction[:3])
         commands[row, 6] -= rot_speed * direction[3]
-    steps = np.arange(0, len(t), 10)
-    belief = frame[[f"belief:{name}" for name in names]].to_numpy(dtype=float)[steps]
-    beta = frame[[f"beta:{name}" for name in names]].to_numpy(dtype=float)[steps]
+    waypoints = np.arange(0, len(t), 10)
+    rows = waypoints[1:]  # the timed steps at waypoints 1..n-1, then the final step
+    if logged:
+        belief = frame[[f"belief:{name}" for name in names]].to_numpy(dtype=float)[rows]
+        beta = frame[[f"beta:{name}" for name in names]].to_numpy(dtype=float)[rows]
+    else:
+        belief, beta = np.full((len(rows), len(names)), 1.0 / len(names)), np.zeros(0)
     return {
         "cmdpos_time": t,
         "curr_pos": q,
         "joy_cmd": commands,
-        "inf_start_time": t[steps[1:]],
+        "traj_hist": q[waypoints],
+        "inf_start_time": t[rows[:-1]],
         "belief_hist": belief,
         "beta_hist": beta,
         "start_T": np.array(1.6e9),

@@ -24,18 +24,23 @@ from casa_core.io.original.importer import ORIGINAL_SCENE
 from casa_core.io.original.sessions import REFERENCE_ANGLES, reference_q
 from casa_core.robot import kinematics as kin
 from casa_core.scene import DEFAULT_SCENE, load_scene
+from tests.io import original_reference as reference
 
 #: Sample times: about 18 Hz, irregular (steps of 0.05 and 0.06 s), 3.0 s in all.
 TIMES = np.cumsum(np.r_[0.0, np.tile([0.05, 0.06], 27), 0.03])
 DURATION = TIMES[-1]  # 3.0 s: ticks 0, 0.05, ..., 3.0
-#: The times of the inference rows and what they logged (two goals): as in the original's
-#: files, row 0 is the step at t = 0, which inf_start_time does not time (one row fewer).
-STEPS = np.array([0.0, 1.0, 1.5, 2.0, 2.5])
-BELIEFS = np.array([[0.5, 0.5], [0.6, 0.4], [np.nan, np.nan], [0.7, 0.3], [0.2, 0.8]])
-BETAS = np.array([[0.5, 0.5], [2.0, 1.0], [4.0, -1.0], [-0.5, 3.0], [1.0, 4.0]])
-#: CASA's alpha after each step, by hand: clip(1 / beta of the most likely goal, 0, 1), the
-#: 0/0 row carrying [0.6, 0.4] (goal 0 likely, beta 4), beta -0.5 giving 0.
-CASA_ALPHAS = [1.0, 0.5, 0.25, 0.0, 0.25]
+#: The timed inference steps, as the original logs them (NOTES section 4): each starts just
+#: after its waypoint (waypoint j at 0.5 j s) over waypoints 0..w; the step from 1.03 s ran
+#: late, so waypoint 3 (1.5 s) started none.
+STEPS = np.array([0.52, 1.03, 2.01, 2.5])
+WAYPOINTS = [1, 2, 4, 5]
+#: The histories: one row per timed step, then the final step after the trial, whose beta
+#: can be negative (here -2.0 for green).
+BELIEFS = np.array([[0.6, 0.4], [np.nan, np.nan], [0.7, 0.3], [0.2, 0.8], [0.3, 0.7]])
+BETAS = np.array([[2.0, 1.0], [4.0, -1.0], [-0.5, 3.0], [1.0, 4.0], [-2.0, 0.5]])
+#: CASA's alpha after each timed step, by hand: clip(1 / beta of the most likely goal, 0, 1),
+#: the 0/0 row carrying [0.6, 0.4] (goal 0 likely, beta 4), beta -0.5 giving 0.
+CASA_ALPHAS = [0.5, 0.25, 0.0, 0.25]
 
 
 def joint_angles(t):
@@ -51,7 +56,13 @@ def command_of(q, velocity, joint7=0.0):
     return command
 
 
+def recorded_waypoints(time, q, count):
+    """``traj_hist``: the samples the original records, the first at or after 0.5 j s."""
+    return q[[int(np.searchsorted(time, 0.5 * j - 1e-9)) for j in range(count)]]
+
+
 def session_arrays(n_goals=2, beta=True):
+    """A session of TIMES; ``beta=False`` logs as NA and PBA do: no betas, the prior."""
     q = joint_angles(TIMES)
     # z+ for the first second, then x- with rot+ (joint 7 backwards) to 2 s, then no key.
     commands = np.zeros_like(q)
@@ -62,14 +73,16 @@ def session_arrays(n_goals=2, beta=True):
             commands[i] = command_of(q[i], [-0.05, 0, 0], joint7=-0.5)
     beliefs = BELIEFS if n_goals == 2 else np.column_stack([BELIEFS * 0.5, np.full(5, 0.5)])
     betas = BETAS if n_goals == 2 else np.column_stack([BETAS, np.ones(5)])
+    if not beta:
+        beliefs = np.full((5, n_goals), 1.0 / n_goals)
     return {
         "cmdpos_time": TIMES,
         "curr_pos": q,
         "joy_cmd": commands,
         "ctl_cmd": np.zeros_like(q),
         "cmd": commands,
-        "traj_hist": np.zeros((31, 7)),
-        "inf_start_time": STEPS[1:],
+        "traj_hist": recorded_waypoints(TIMES, q, 7),
+        "inf_start_time": STEPS,
         "sub_hist": np.ones((5, n_goals)),
         "belief_hist": beliefs,
         "beta_hist": betas if beta else np.zeros(0),
@@ -90,7 +103,7 @@ def write_session(folder, name, **changes):
 def sessions(tmp_path):
     folder = tmp_path / "sessions" / "P03"
     write_session(folder, "task1c_data.npz")
-    write_session(folder, "task1b_data.npz")
+    write_session(folder, "task1b_data.npz", build={"beta": False})
     write_session(folder, "task1a_data.npz", build={"beta": False})
     write_session(folder, "task2c_learned_data.npz", build={"n_goals": 3})
     write_session(folder, "task1ex_data.npz")
@@ -187,42 +200,73 @@ def test_casa_confidence_beliefs_and_alpha(sessions, tmp_path):
     assert run_import(sessions, out) == 0
     meta, frame = read_trial(out / "P03" / "task1c")
     carried = BELIEFS.copy()
-    carried[2] = BELIEFS[1]  # the 0/0 row carries the last good row
+    carried[1] = BELIEFS[0]  # the 0/0 row carries the last good row
     for row in frame.itertuples():
+        # Each timed step from the first tick at or after its start; the final row on none.
         step = held_at(STEPS, range(len(STEPS)), row.t)
-        if step is None:  # before the first step: no evidence
-            assert (row.alpha, row[frame.columns.get_loc("beta:green") + 1]) == (1.0, 0.0)
-            assert frame.loc[row.Index, ["belief:green", "belief:purple"]].tolist() == [0.5, 0.5]
+        beliefs = frame.loc[row.Index, ["belief:green", "belief:purple"]].to_numpy()
+        betas = frame.loc[row.Index, ["beta:green", "beta:purple"]].to_numpy()
+        if step is None:  # before the first step (0.52 s): no evidence
+            assert row.t < 0.52 and row.alpha == 1.0
+            assert betas.tolist() == [0.0, 0.0] and beliefs.tolist() == [0.5, 0.5]
             continue
         assert row.alpha == pytest.approx(CASA_ALPHAS[step])
-        betas = frame.loc[row.Index, ["beta:green", "beta:purple"]].to_numpy()
         assert np.allclose(betas, np.maximum(BETAS[step], 0.0))  # negative betas -> 0
-        beliefs = frame.loc[row.Index, ["belief:green", "belief:purple"]].to_numpy()
         assert np.allclose(beliefs, carried[step])
-    # Two negative betas (-1.0, -0.5) and one 0/0 belief row were built.
+    # The last tick (3.0 s) holds the last timed step, not the step after the trial.
+    assert frame["belief:purple"].iloc[-1] == 0.8 and frame["beta:green"].iloc[-1] == 1.0
+    assert not np.isclose(frame["belief:purple"], BELIEFS[-1, 1]).any()
+    # Two negative betas of the timed steps (-1.0, -0.5) and one 0/0 belief row were built.
     assert "negative betas written as 0: 2" in meta["notes"]
     assert "belief rows carried from the last good row: 1" in meta["notes"]
+    # The metadata keeps when each step started, its waypoint, the waypoints and the final
+    # step as the original computed it (its beta negative).
+    steps = meta["inference_steps"]
+    assert steps["started"] == STEPS.tolist() and steps["waypoint"] == WAYPOINTS
+    expected = recorded_waypoints(TIMES, joint_angles(TIMES), 7)
+    assert np.array_equal(steps["waypoints"], expected)
+    assert steps["after_trial"] == {
+        "waypoint": 6,
+        "beta": {"green": -2.0, "purple": 0.5},
+        "belief": {"green": 0.3, "purple": 0.7},
+    }
+    assert "flags" not in meta
 
 
-def test_pba_alpha_is_link7_distance_to_the_predicted_goal(sessions, tmp_path):
+@pytest.mark.parametrize("logged", [False, True], ids=["prior-only", "logged-beliefs"])
+def test_pba_alpha_is_link7_distance_to_the_predicted_goal(tmp_path, logged):
+    folder = tmp_path / "sessions" / "P03"
+    write_session(folder, "task1b_data.npz", build={"beta": logged})
     out = tmp_path / "out"
-    assert run_import(sessions, out) == 0
-    _, frame = read_trial(out / "P03" / "task1b")
+    assert run_import(folder, out) == 0
+    meta, frame = read_trial(out / "P03" / "task1b")
     # The link-7 goals of the scene the import copies (rounded to 1 mm), where a replay
     # measures the same trial.
     scene = load_scene(ORIGINAL_SCENE)
-    goal = {0: scene.goal("green", "link7"), 1: scene.goal("purple", "link7")}
+    goals = np.array([scene.goal("green", "link7"), scene.goal("purple", "link7")])
+    points = reference.link7_waypoints(recorded_waypoints(TIMES, joint_angles(TIMES), 7))
     carried = BELIEFS.copy()
-    carried[2] = BELIEFS[1]
+    carried[1] = BELIEFS[0]
     for row in frame.itertuples():
         step = held_at(STEPS, range(len(STEPS)), row.t)
         if step is None:
             assert row.alpha == 1.0
             continue
-        link7 = kin.link7_position(joint_angles([STEPS[step]])[0])
-        likely = int(np.argmax(carried[step]))
-        expected = min(1.0, np.linalg.norm(link7 - goal[likely]) / 0.55)
-        assert row.alpha == pytest.approx(expected)
+        w = WAYPOINTS[step]
+        if logged:
+            likely = int(np.argmax(carried[step]))
+        else:  # the tests' reference of the original's posterior at beta = 1
+            sub = reference.suboptimality(points, goals, w, defects=True)
+            likely = int(np.argmax(reference.belief(sub, 1.0, w, defects=True)))
+        expected = min(1.0, np.linalg.norm(points[w] - goals[likely]) / 0.55)
+        assert row.alpha == pytest.approx(expected, abs=1e-12)
+    beliefs = [c for c in frame.columns if c.startswith(("belief:", "beta:"))]
+    if logged:
+        assert beliefs == ["beta:green", "belief:green", "beta:purple", "belief:purple"]
+    else:  # the prior on every row is no belief: no columns, the reason said
+        assert beliefs == [] and meta["flags"] == ["no-logged-inference"]
+        assert "no beliefs or betas: the session logged no inference result" in meta["notes"]
+        assert "after_trial" not in meta["inference_steps"]
 
 
 def test_na_without_betas(sessions, tmp_path):
@@ -230,9 +274,9 @@ def test_na_without_betas(sessions, tmp_path):
     assert run_import(sessions, out) == 0
     meta, frame = read_trial(out / "P03" / "task1a")
     assert (frame["alpha"] == 1.0).all()
-    assert not [c for c in frame.columns if c.startswith("beta:")]
-    assert "negative betas written as 0: 0" in meta["notes"]
-    assert {"belief:green", "belief:purple"} <= set(frame.columns)
+    assert not [c for c in frame.columns if c.startswith(("beta:", "belief:"))]
+    assert meta["flags"] == ["no-logged-inference"]
+    assert meta["inference_steps"]["waypoint"] == WAYPOINTS
 
 
 def test_rerun_refuses_to_overwrite_unless_forced(sessions, tmp_path, capsys):
@@ -326,12 +370,12 @@ def test_the_scene_holds_link7_and_the_tool_points_of_the_reference_angles():
     assert scene.point == "link7"
     roles = {"start": "start", "green": "goal 0", "purple": "goal 1", "red": "unknown goal"}
     assert set(REFERENCE_ANGLES) == set(roles.values())
-    for name, reference in roles.items():
-        link7 = kin.link7_position(reference_q(reference))
+    for name, role in roles.items():
+        link7 = kin.link7_position(reference_q(role))
         written = scene.start.position if name == "start" else scene.goals[name]
         assert np.allclose(written, link7, atol=0.0005 + 1e-9), name  # rounded to 1 mm
         if name != "start":
-            tool = kin.forward_kinematics(reference_q(reference))[:3, 3]
+            tool = kin.forward_kinematics(reference_q(role))[:3, 3]
             assert np.allclose(scene.goal(name, "tool"), tool, atol=0.0005 + 1e-9), name
     # The original's goal 0 at link 7, to 1 mm, as docs/data-contracts.md gives it.
     assert scene.goals["green"] == (-0.548, -0.444, 0.424)
@@ -369,8 +413,24 @@ def test_the_workflow_builds_and_replays_the_eleven_recorded_layouts(tmp_path):
     assert result.returncode == 0, result.stderr
     trials = pd.read_csv(repo / target, keep_default_na=False)
     assert len(trials) == 9 and set(trials["dataset"]) == {"original"}
-    flagged = trials.loc[trials["flags"] != "", "trial"].tolist()
-    assert flagged == ["P01/task4a"] and set(trials["preset"]) == {"original_defects"}
+    flags = dict(zip(trials["trial"], trials["flags"], strict=True))
+    assert {trial for trial, flag in flags.items() if flag} == {
+        f"P01/{stem}" for stem in ("task1a", "task1b", "task2a", "task2b", "task4a")
+    }
+    assert flags["P01/task4a"] == "no-user-command" and flags["P01/task1b"] == "no-logged-inference"
+    assert set(trials["preset"]) == {"original_defects"}
+    # C1 is judged on the Known Goal CASA trial's own ticks: its last timed step's beta and
+    # the lowest alpha its steps gave, not the step after the trial (beta -1.5 for green,
+    # its most likely goal, which read as a tick would give beta 0 and alpha 0).
+    name = "task1c_data.npz"
+    arrays = recorded_layout(*RECORDED[name], seed=list(RECORDED).index(name))
+    beta, belief = arrays["beta_hist"][:-1], arrays["belief_hist"][:-1]
+    final = beta[-1, 0]
+    lowest = min(1.0, np.clip(1 / beta[np.arange(len(beta)), belief.argmax(axis=1)], 0, 1).min())
+    results = (repo / "data/processed/original/results.md").read_text()
+    c1 = next(line for line in results.splitlines() if line.startswith("| C1"))
+    assert f"final beta_hat median {final:.3g}" in c1 and f"lowest alpha median {lowest:.3g}" in c1
+    assert final > 0 and lowest > 0
     replayed = pd.read_csv(repo / "data/processed/original/replay/replay.csv")
     status = dict(zip(replayed["trial"], replayed["status"], strict=True))
     # NA is not replayed by default; the original's learned intents are not imported.
@@ -389,6 +449,11 @@ def test_the_workflow_builds_and_replays_the_eleven_recorded_layouts(tmp_path):
     assert set(done["preset"]) == {"original_defects"} and set(done["point"]) == {"link7"}
     learned = replayed.set_index("trial").loc["P01/task4c_learned", "reason"]
     assert "'learned_pour' is not a goal of the scene" in learned
+    # Each assisted trial read its recorded waypoints; the PBA ones had nothing to compare.
+    assert set(done["path"]) == {"waypoints"}
+    pba = done[done["method"] == "PBA"]
+    assert pba["max_diff_belief"].isna().all() and pba["max_diff_alpha"].isna().all()
+    assert pba["reason"].str.contains("flagged no-logged-inference").all()
     assert list((repo / "figures/original/replay").rglob("*.replay.png"))
     for name in ("objective.png", "objective.pdf"):
         assert (repo / "figures/original" / name).stat().st_size > 0
@@ -455,6 +520,14 @@ RECORDED = {
     "task4c_learned_data.npz": (126, 9, 3, True, {}),
     "task4ex_data.npz": (132, 29, 3, True, {}),
 }
+#: The waypoint of each timed step by the number of steps: 29 when none ran late (waypoints
+#: 1..29; waypoint 30 ends the trial and starts the final step), 27 when two steps ran into
+#: the next waypoint, 9 after learning, where a step takes about 1.5 s.
+STEP_WAYPOINTS = {
+    29: list(range(1, 30)),
+    27: [w for w in range(1, 30) if w not in (8, 20)],
+    9: [1, 4, 7, 10, 13, 16, 19, 22, 25],
+}
 
 
 def object_array(value):
@@ -469,14 +542,19 @@ ROBOT_DROVE = "task4a_data.npz"
 
 
 def recorded_layout(n, m, goals, with_beta, costs, seed, *, command=True):
+    """A session laid out as the original logs one (NOTES section 4): samples over 15.55 s,
+    31 waypoints, each timed step just after its waypoint, the final step's beta negative
+    for green; without betas, the prior on every belief row."""
     rng = np.random.default_rng(seed)
-    time = np.sort(rng.uniform(0.0, 15.0, n))
-    time[0] = 0.0
+    time = np.sort(rng.uniform(0.0, 15.55, n))
+    time[0], time[-1] = 0.0, 15.55
     q = joint_angles(time)
     command = np.array([command_of(qi, [0.0, 0.0, 0.05 * command]) for qi in q])
-    # Late steps keep their times: every 0.5 s, but one step of 2 s after the fifth.
-    timed = 0.5 * np.arange(1, m + 1) + np.where(np.arange(1, m + 1) > 5, 1.5, 0.0)
+    timed = 0.5 * np.array(STEP_WAYPOINTS[m]) + rng.uniform(0.001, 0.04, m)
     belief = rng.dirichlet(np.ones(goals), m + 1)
+    belief[m] = np.r_[0.9, np.full(goals - 1, 0.1 / (goals - 1))]
+    beta = rng.uniform(0.5, 4, (m + 1, goals))
+    beta[m, 0] = -1.5  # the step after the trial, which ended short of green, its most likely
     arrays = {
         "cmdpos_time": time,
         "curr_pos": q,
@@ -484,11 +562,11 @@ def recorded_layout(n, m, goals, with_beta, costs, seed, *, command=True):
         "ctl_cmd": np.zeros((n, 7)),
         "cmd": command,
         "num_key_presses": np.arange(n, dtype=np.int64),
-        "traj_hist": np.zeros((31, 7)),
+        "traj_hist": recorded_waypoints(time, q, 31),
         "inf_start_time": timed,
         "sub_hist": rng.uniform(0, 5, (m + 1, goals)),
-        "belief_hist": belief,
-        "beta_hist": rng.uniform(0.5, 4, (m + 1, goals)) if with_beta else np.zeros(0),
+        "belief_hist": belief if with_beta else np.full((m + 1, goals), 1.0 / goals),
+        "beta_hist": beta if with_beta else np.zeros(0),
         "goal_costs": np.zeros(0),
         "curr_cost": np.zeros(0),
         "start_T": np.array(1.6e9),
@@ -514,31 +592,66 @@ def test_every_recorded_layout_imports_with_its_steps_real_times(tmp_path, capsy
     assert run_import(folder, out) == 0
     stems = {p.stem for p in (out / "P01").glob("*.json")}
     assert stems == {n.removesuffix("_data.npz") for n in RECORDED if "ex_" not in n}
-    # The session the robot drove is imported, said and flagged; no other is.
+    # The session the robot drove is imported, said and flagged.
     printed = capsys.readouterr().out
     warning = f"{folder / ROBOT_DROVE}: key 'joy_cmd': warning [no-user-command] the user's"
     assert printed.count("warning [no-user-command]") == 1 and warning in printed
     flags = {
         stem: json.loads((out / "P01" / f"{stem}.json").read_text()).get("flags") for stem in stems
     }
-    assert flags.pop("task4a") == ["no-user-command"] and set(flags.values()) == {None}
+    assert flags.pop("task4a") == ["no-user-command"]
+    # NA and PBA logged the prior on every row: no beliefs, flagged; the others have theirs.
+    unlogged = {stem for stem in flags if not RECORDED[f"{stem}_data.npz"][3]}
+    assert unlogged == {"task1a", "task1b", "task2a", "task2b"}
+    for stem, flag in flags.items():
+        _, frame = read_trial(out / "P01" / stem)
+        beliefs = [c for c in frame.columns if c.startswith(("belief:", "beta:"))]
+        if stem in unlogged:
+            assert flag == ["no-logged-inference"] and beliefs == [], stem
+        else:
+            assert flag is None and beliefs, stem
     meta, _ = read_trial(out / "P01" / "task1c")
     assert meta["inference"] == {
         "preset": "original_defects",
         "evidence": "executed",
         "point": "link7",
     }
-    # Row 0 holds from t = 0; row k from inf_start_time[k - 1], late steps at their time.
-    arrays = recorded_layout(*RECORDED["task2c_data.npz"], seed=7)
-    _, frame = read_trial(out / "P01" / "task2c")
-    times = np.r_[0.0, arrays["inf_start_time"]]
-    belief = arrays["belief_hist"] / arrays["belief_hist"].sum(axis=1, keepdims=True)
-    step = [held_at(times, range(len(times)), t) for t in frame["t"]]
-    assert np.allclose(frame["belief:green"], belief[step, 0])
+    # Row k holds from the first tick at or after inf_start_time[k], late steps included;
+    # the prior before row 0; the final row (beta -1.5 for green) on no tick.
+    for stem in ("task1c", "task4c_learned"):
+        name = f"{stem}_data.npz"
+        arrays = recorded_layout(*RECORDED[name], seed=list(RECORDED).index(name))
+        meta, frame = read_trial(out / "P01" / stem)
+        times = arrays["inf_start_time"]
+        belief = arrays["belief_hist"] / arrays["belief_hist"].sum(axis=1, keepdims=True)
+        step = [held_at(times, range(len(times)), t) for t in frame["t"]]
+        expected = [1 / belief.shape[1] if k is None else belief[k, 0] for k in step]
+        assert np.allclose(frame["belief:green"], expected), stem
+        assert frame["beta:green"].min() >= 0 and frame["beta:green"].iloc[-1] > 0
+        steps = meta["inference_steps"]
+        m = RECORDED[name][1]
+        assert steps["started"] == times.tolist() and steps["waypoint"] == STEP_WAYPOINTS[m]
+        assert len(steps["waypoints"]) == 31 and steps["after_trial"]["waypoint"] == 30
+        assert steps["after_trial"]["beta"]["green"] == -1.5
 
 
-def test_histories_without_the_row_at_t0_are_refused_naming_the_rule(sessions, capsys, tmp_path):
-    path = write_session(sessions, "task1c_data.npz", inf_start_time=STEPS)
+def test_histories_without_the_final_row_are_refused_naming_the_rule(sessions, capsys, tmp_path):
+    path = write_session(sessions, "task1c_data.npz", inf_start_time=np.r_[STEPS, 2.8])
     assert run_import(sessions, tmp_path / "out") == 2
     err = capsys.readouterr().err
     assert f"{path}: key 'belief_hist': [rows] has 5 rows, expected 6" in err
+
+
+@pytest.mark.parametrize(
+    ("steps", "message"),
+    [
+        ([0.52, 0.8, 2.01, 2.5], "steps 0 and 1 started at 0.52 and 0.8 s, both after waypoint 1"),
+        ([0.3, 1.03, 2.01, 2.5], "step 0 started at 0.3 s, before waypoint 1"),
+        ([0.52, 1.03, 2.01, 3.6], "step 3 started at 3.6 s, after waypoint 7, but traj_hist has 7"),
+    ],
+    ids=["two-at-one-waypoint", "before-waypoint-1", "after-the-last-waypoint"],
+)
+def test_steps_that_no_waypoint_started_are_refused(sessions, capsys, tmp_path, steps, message):
+    path = write_session(sessions, "task1c_data.npz", inf_start_time=np.array(steps))
+    assert run_import(sessions, tmp_path / "out") == 2
+    assert f"{path}: key 'inf_start_time': [waypoints] {message}" in capsys.readouterr().err

@@ -538,6 +538,17 @@ def test_a_fifo_named_like_a_log_is_not_opened(tmp_path):
     assert _found(tmp_path) == {("surveys.csv", "", "readable", "error")}
 
 
+#: The metadata of a human's Known Goal trial under CASA.
+KNOWN_GOAL_META = {
+    "schema": "casa-trial/1",
+    "participant": "p01",
+    "task": "known_goal",
+    "method": "CASA",
+    "phase": "no_misspecification",
+    "source": "human",
+}
+
+
 @pytest.mark.parametrize(
     ("inference", "message"),
     [
@@ -548,15 +559,42 @@ def test_a_fifo_named_like_a_log_is_not_opened(tmp_path):
     ],
 )
 def test_the_inference_settings_of_a_trial_are_checked(inference, message):
-    meta = {
-        "schema": "casa-trial/1",
-        "participant": "p01",
-        "task": "known_goal",
-        "method": "CASA",
-        "phase": "no_misspecification",
-        "source": "human",
-    }
+    meta = KNOWN_GOAL_META
     assert check_meta({**meta, "inference": {"preset": "paper", "evidence": "executed"}}, "t") == []
     [problem] = check_meta({**meta, "inference": inference}, "t.json")
     assert (problem.where, problem.rule) == ("key 'inference'", "inference-settings")
+    assert message in problem.message
+
+
+#: A valid ``inference_steps``: two steps, the second late, over three waypoints.
+STEPS = {
+    "started": [0.51, 1.52],
+    "waypoint": [1, 3],
+    "waypoints": [[0.0] * 7, [0.1] * 7, [0.2] * 7, [0.3] * 7],
+    "after_trial": {"waypoint": 3, "beta": {"green": -0.5, "purple": None}, "belief": {}},
+}
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"started": [0.51]}, "waypoint has 2 entries, started 1: one per step"),
+        ({"started": [1.52, 0.51]}, "started and waypoint must strictly increase"),
+        ({"waypoint": [1, 1]}, "started and waypoint must strictly increase"),
+        ({"waypoint": [0, 3]}, "waypoint: expected a list of waypoint indices, each >= 1"),
+        ({"started": [0.51, "1.5"]}, "started: expected a list of times in seconds"),
+        ({"waypoints": [[0.0] * 6] * 4}, "waypoints: expected 2 or more lists of 7 joint angles"),
+        ({"waypoints": [[0.0] * 7] * 3}, "waypoint 3 of the last step is not among the 3"),
+        ({"after_trial": {"beta": {"blue": 1.0}}}, "beta names 'blue', which is not in intents"),
+        ({"after_trial": {"belief": {"green": "x"}}}, "belief must map intent names to numbers"),
+        ({"after_trial": {"alpha": 1.0}}, "after_trial: expected an object with the keys"),
+        ({"after_trial": {"waypoint": 4}}, "after_trial: waypoint 4 is not among the 4"),
+        ({"steps": []}, "'steps' is not a key of it; allowed: started, waypoint"),
+    ],
+)
+def test_the_logged_inference_steps_of_a_trial_are_checked(change, message):
+    meta = {**KNOWN_GOAL_META, "intents": ["green", "purple"]}
+    assert check_meta({**meta, "inference_steps": STEPS}, "t.json") == []
+    [problem] = check_meta({**meta, "inference_steps": {**STEPS, **change}}, "t.json")
+    assert (problem.where, problem.rule) == ("key 'inference_steps'", "inference-steps")
     assert message in problem.message

@@ -2,7 +2,7 @@
 
 ``casa import original DIR --out data/raw/NAME`` calls :func:`import_original`: each
 ``task<N><letter>_data.npz`` of ``DIR`` becomes ``<out>/<participant>/<stem>.json`` and
-``.csv`` (:mod:`casa_core.io.original.sessions` converts one file), and the scene of the
+``.csv`` (:mod:`casa_core.io.original.conversion` converts one file), and the scene of the
 original's layout is copied to ``<out>/scene.yaml``, which the pipeline then uses for this
 dataset. Names, in ``docs/data-contracts.md``:
 
@@ -30,13 +30,9 @@ import numpy as np
 
 from casa_core.defaults import HORIZON
 from casa_core.io import Problem, atomic_write_text, check_meta, frame_to_csv_text, write_trial
-from casa_core.io.contract import SCENE_NAME
-from casa_core.io.original.sessions import (
-    SessionError,
-    convert_session,
-    read_session,
-    started_at,
-)
+from casa_core.io.contract import NO_LOGGED_INFERENCE, NO_USER_COMMAND, SCENE_NAME
+from casa_core.io.original.conversion import convert_session, inference_steps
+from casa_core.io.original.sessions import SessionError, read_session, started_at
 from casa_core.io.problems import errors
 from casa_core.io.trial_log import inside, trial_files
 from casa_core.io.validation import parse_trial_csv
@@ -135,8 +131,6 @@ class ImportResult:
     warnings: list[Problem] = field(default_factory=list)
 
 
-#: The flag of a session in which the robot drove.
-NO_USER_COMMAND = "no-user-command"
 #: Tool travel (m) beyond which a session without any user command is one the robot drove.
 ROBOT_TRAVEL = 0.05
 
@@ -155,18 +149,32 @@ def _convert(path, name: SessionName, participant: str, target: Path, scene, war
     """The metadata and frame of one session, checked as write_trial will check them;
     ``warnings`` gets what is imported but said (a session the robot drove)."""
     session = read_session(path)
-    names = goal_names(name, session.belief.shape[1])
+    names = goal_names(name, session.goals)
     converted = convert_session(
         session, name.method, names, scene.goals_at("link7") or None, point=scene.point
     )
     frame = converted.frame
+    evidence = "the recorded waypoints" if session.waypoints is not None else "curr_pos"
     notes = (
         f"imported from the original implementation's session file {path.name}: "
         f"{converted.samples} samples resampled to {len(frame)} ticks of 0.05 s; keys from "
-        f"joy_cmd; alpha recomputed by the {name.method} rule; negative betas written as 0: "
+        f"joy_cmd; {len(session.steps)} timed inference steps, each held from the tick at or "
+        "after its start (inf_start_time), the step after the trial kept in inference_steps; "
+        f"alpha recomputed by the {name.method} rule; negative betas written as 0: "
         f"{converted.negative_betas}; belief rows carried from the last good row: "
         f"{converted.bad_beliefs}; beta rows not finite, carried: {converted.bad_betas}"
     )
+    if not session.logged_inference:
+        notes += (
+            "; no beliefs or betas: the session logged no inference result (beta_hist is "
+            "empty, belief_hist holds the uniform prior on every row: the posterior of the "
+            "original's joint table over goals and beta was never saved)"
+        )
+        if name.method == "PBA":
+            notes += (
+                "; PBA's most likely goal recomputed by the original's posterior at beta = 1 "
+                f"over {evidence}"
+            )
     meta = {
         "schema": "casa-trial/1",
         "participant": participant,
@@ -178,17 +186,21 @@ def _convert(path, name: SessionName, participant: str, target: Path, scene, war
         "max_duration": HORIZON,
         # What computed the logged numbers: the original, defects included, at link 7.
         "inference": {"preset": DEFECTS_PRESET, "evidence": "executed", "point": "link7"},
+        "inference_steps": inference_steps(session, names),
         "notes": notes,
     }
+    flags = [] if session.logged_inference else [NO_LOGGED_INFERENCE]
     travel = _robot_drove(session, frame)
     if travel is not None:
-        meta["flags"] = [NO_USER_COMMAND]
+        flags.append(NO_USER_COMMAND)
         warning = (
             f"the user's command is zero on every row while the arm travels {travel:.2f} m: "
             f"the robot drove; imported with the flag {NO_USER_COMMAND}, which analyses of "
             "people's behaviour (calibration) leave out"
         )
         warnings.append(Problem(str(path), "key 'joy_cmd'", NO_USER_COMMAND, warning, "warning"))
+    if flags:
+        meta["flags"] = flags
     if (start := started_at(session)) is not None:
         meta["started_at"] = start
     json_path, csv_path = trial_files(target)

@@ -2,8 +2,10 @@
 
 The replay preset ``original_defects`` (:data:`~casa_core.vocabulary.DEFECTS_PRESET`)
 redoes this over an imported session, so that its logged beliefs and betas can be checked
-against what their own code would give on the same path. It is a check of imports, not a
-model to analyse with: the preset ``original`` computes the same without the defects.
+against what their own code would give on the same path; the import recomputes a PBA
+session's most likely goal with it where the session did not save its posterior. It is a
+check of imports, not a model to analyse with: the preset ``original`` computes the same
+without the defects.
 ``docs/replay.md`` lists both. At step ``i`` over the waypoints ``w_0 .. w_i`` (link 7,
 every 0.5 s) and goals ``G``:
 
@@ -17,16 +19,6 @@ every 0.5 s) and goals ``G``:
 * defect 4: the posterior normalised in linear space (0 / 0 when every term underflows);
 * alpha: CASA ``clip(1 / beta of the most likely goal, 0, 1)``; PBA the belief under
   beta = 1 and ``clip(|w_i - G*| / 0.55, 0, 1)``; NA 1.
-
-Examples
---------
-One step of 0.1 m straight toward goal 0: its suboptimality is the penalty alone,
-100 x 0.9 / 1.8 = 50, and beta = floor(3.5) / (50 + 4):
-
->>> goals = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
->>> step = original_step(np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]), goals, "confidence")
->>> step.suboptimality.round(3).tolist(), round(float(step.beta[0]), 6), step.alpha
-([50.0, 63.256], 0.055556, 1.0)
 """
 
 from __future__ import annotations
@@ -70,6 +62,16 @@ def original_step(waypoints: np.ndarray, goals: np.ndarray, arbitration: str) ->
 
     ``arbitration`` is ``"confidence"`` (CASA), ``"distance"`` (PBA) or anything else
     (alpha 1).
+
+    Examples
+    --------
+    One step of 0.1 m straight toward goal 0: its suboptimality is the penalty alone,
+    100 x 0.9 / 1.8 = 50, and beta = floor(3.5) / (50 + 4):
+
+    >>> goals = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    >>> step = original_step(np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]), goals, "confidence")
+    >>> step.suboptimality.round(3).tolist(), round(float(step.beta[0]), 6), step.alpha
+    ([50.0, 63.256], 0.055556, 1.0)
     """
     i = len(waypoints) - 1
     current = waypoints[-1]
@@ -93,18 +95,29 @@ def original_step(waypoints: np.ndarray, goals: np.ndarray, arbitration: str) ->
     return OriginalStep(subopt, beta, belief, star, alpha)
 
 
-def original_rows(times, waypoints, goals, names, arbitration, epsilon=EPSILON) -> list[dict]:
-    """One replay row per step and goal: step ``k`` (``times[k]``, k >= 1) over
-    ``waypoints[0..k]``; ``names`` are the goals' names, ``epsilon`` the threshold below
-    which every beta makes the step misspecified."""
+def original_rows(steps, waypoints, goals, names, arbitration, epsilon=EPSILON) -> list[dict]:
+    """One replay row per step and goal.
+
+    ``steps`` holds ``(t, w)`` per step: its time and the last of ``waypoints`` it ran over
+    (``waypoints[0..w]``, w >= 1); ``names`` are the goals' names, ``epsilon`` the threshold
+    below which every beta makes the step misspecified.
+
+    Examples
+    --------
+    >>> goals = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    >>> path = np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.0, 0.0]])
+    >>> rows = original_rows([(0.52, 2)], path, goals, ["green", "purple"], "confidence")
+    >>> [(row["t"], row["intent"], row["theta_star"]) for row in rows]
+    [(0.52, 'green', 'green'), (0.52, 'purple', 'green')]
+    """
     rows = []
-    for k in range(1, len(times)):
-        step = original_step(np.asarray(waypoints[: k + 1]), goals, arbitration)
+    for t, w in steps:
+        step = original_step(np.asarray(waypoints[: w + 1]), goals, arbitration)
         misspecified = bool(np.all(step.beta < epsilon))
         for g, name in enumerate(names):
             rows.append(
                 {
-                    "t": float(times[k]),
+                    "t": float(t),
                     "intent": name,
                     "suboptimality": float(step.suboptimality[g]),
                     "beta": float(step.beta[g]),
