@@ -141,6 +141,7 @@ def test_the_replay_reads_the_path_its_log_was_computed_on(tmp_path):
     for name, extra in (("recorded", []), ("resampled", []), ("recorded", ["--path", "ticks"])):
         out = tmp_path / "replay" / f"{name}{len(extra)}"
         argv = ["replay", str(tmp_path / "raw" / name), "--out", str(out), *extra]
+        argv += ["--preset", "original_defects"]
         assert main(argv) == 0
         table = pd.read_csv(out / "replay.csv", keep_default_na=False).set_index("trial")
         summaries[name, bool(extra)] = table
