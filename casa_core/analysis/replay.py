@@ -145,7 +145,7 @@ def replay_trial(
     if on_waypoints:
         logged = list(zip(recorded["started"], recorded["waypoint"], strict=True))
         path_states = _waypoint_states(recorded["waypoints"], point)
-    else:
+    elif chosen is DEFECTS:
         logged, path_states = _tick_steps(t, ticks, per_step, states, recorded)
     if chosen is DEFECTS:
         if lam is not None:
