@@ -84,6 +84,8 @@ class Simulator:
                         rng=np.random.default_rng([self.seed, draw, person, number + 1]),
                         tick=self.scene.teleop.dt,
                         operator=self.operator,
+                        speed=self.scene.teleop.speed,
+                        rot_speed=self.scene.teleop.rot_speed,
                     )
                     result = run_trial(
                         self.scene,

@@ -1,7 +1,7 @@
 """The study: who holds the keys, the closed loop, the protocol and the simulated study.
 
-- :mod:`~casa_core.study.participants`, :mod:`~casa_core.study.path_geometry`: simulated
-  participants (operator models) and the path geometry their keys follow;
+- :mod:`~casa_core.study.participants`, :mod:`~casa_core.study.arm_estimate`: simulated
+  participants (operator models) and the predictive operator's estimate of the arm;
 - :mod:`~casa_core.study.key_sources`: scripted key sources and their protocol;
 - :mod:`~casa_core.study.closed_loop`: one trial, pybullet in the loop;
   :mod:`~casa_core.study.drive`: how a tick's keys and the robot's action move the arm, per

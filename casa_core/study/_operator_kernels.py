@@ -1,7 +1,7 @@
 """The simulated operator's per-tick path geometry, compiled (numba).
 
-:mod:`casa_core.study.participants` asks twice a tick for the path point nearest a
-position and once for the point a fixed path length ahead; written in numpy each is a
+:mod:`casa_core.study.participants` asks each tick for the path point nearest a
+position and for the point a fixed path length ahead; written in numpy each is a
 dozen calls on arrays of 4 numbers, or a cumulative sum of the whole remaining path.
 These kernels compute the same numbers with the same floating-point operations in the
 same order (no fastmath), so the operator holds the same keys on every tick. Dot
@@ -82,49 +82,3 @@ def track(scaled, steps, progress, perceived, window, lookahead, rot_scale):
     here[3] *= rot_scale
     progress += nearest_row(scaled, progress, progress + window, here)
     return progress, progress + first_reaching(steps, progress, lookahead)
-
-
-@njit(cache=True)
-def predicted_offset(scaled, scale, perceived, velocity, horizon, start, stop):
-    """The predicted position's nearest path point and its offset from it.
-
-    ``here = perceived * scale`` and ``predicted = here + velocity * scale * horizon``;
-    the nearest of ``scaled[start:stop]`` to it, as an index into ``scaled``.
-
-    Returns
-    -------
-    here, nearest, offset
-        ``offset = predicted - scaled[nearest]``.
-
-    Examples
-    --------
-    >>> scaled = np.array([[0.0, 0, 0, 0], [1.0, 0, 0, 0], [2.0, 0, 0, 0]])
-    >>> here, nearest, offset = predicted_offset(
-    ...     scaled, np.ones(4), np.zeros(4), np.array([1.0, 0.5, 0, 0]), 1.1, 0, 3
-    ... )
-    >>> int(nearest), offset.round(3).tolist()
-    (1, [0.1, 0.55, 0.0, 0.0])
-    """
-    here = perceived * scale
-    predicted = here + velocity * scale * horizon
-    nearest = start + nearest_row(scaled, start, stop, predicted)
-    return here, nearest, predicted - scaled[nearest]
-
-
-@njit(cache=True)
-def correction(offset, tangent, along, behind, pushing):
-    """Back to the path across it, and along it by ``behind`` when ``pushing``.
-
-    ``-(offset - along * tangent)``, plus ``behind * tangent / max|tangent|`` when
-    pushing (the axis the path runs along most gets the whole shortfall).
-
-    Examples
-    --------
-    >>> tangent = np.array([1.0, 0.0, 0.0, 0.0])
-    >>> correction(np.array([0.1, 0.2, 0, 0]), tangent, 0.1, 0.5, True).tolist()
-    [0.5, -0.2, 0.0, 0.0]
-    """
-    result = -(offset - along * tangent)
-    if pushing:
-        result += behind * tangent / np.abs(tangent).max()
-    return result

@@ -18,10 +18,12 @@ delay, little noise, no lapses and no wrong keys.
 
 Two operator models share this machinery (config key ``simulation.operator``):
 *lookahead* (:class:`SimulatedParticipant`) steers toward a point :data:`LOOKAHEAD` ahead
-on the path; *predictive* (:class:`PredictiveParticipant`) acts on where the arm is
-heading, with a lead time :data:`LEAD_TIME`, a velocity filter :data:`VELOCITY_FILTER` and
-a refractory interval :data:`REFRACTORY`. What each model does, and the literature each
-parameter comes from: docs/departures.md, "Simulated operators".
+on the path; *predictive* (:class:`PredictiveParticipant`) knows its own keys, estimates
+the arm from them and from what it sees (:mod:`casa_core.study.arm_estimate`) and acts on
+where the arm is heading, with a lead time :data:`LEAD_TIME`, the estimate's period
+:data:`ESTIMATE_PERIOD`, a refractory interval :data:`REFRACTORY` and bouts of keys at most
+:data:`BOUT` long. What each model does, and the literature each parameter comes from:
+docs/departures.md, "Simulated operators".
 """
 
 from __future__ import annotations
@@ -31,22 +33,30 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from casa_core.defaults import ROT_SPEED, SPEED
 from casa_core.fixed_order import dot, length
-from casa_core.robot.keys import AXIS_KEYS
+from casa_core.robot.keys import AXIS_KEYS, keys_to_action
 from casa_core.study import _operator_kernels as _kernels
-from casa_core.study.path_geometry import unit_tangents
+from casa_core.study.arm_estimate import ArmEstimate
 from casa_core.study.settings import LOGNORMAL_PARAMETERS, Population
 
 # Rotation error is compared with position error at this many metres per radian.
 ROT_TO_METRES = 0.1
+#: Time constant of the perception noise's AR(1) variation, s.
+NOISE_TIME = 0.5
+#: The perception noise per axis x, y, z relative to ``perception_noise``: twice in depth (x).
+DEPTH_NOISE = np.array([2.0, 1.0, 1.0])
 LOOKAHEAD = 0.04  # m of path ahead that the participant steers toward
 DONE_ROT_TOLERANCE = 0.15  # rad
 #: The predictive operator's lead time constant T_L, s (docs/departures.md).
 LEAD_TIME = 0.5
-#: Time constant of the predictive operator's velocity estimate, s (docs/departures.md).
-VELOCITY_FILTER = 1.0
+#: Natural period of the predictive operator's estimate of the arm's drift, s
+#: (:class:`~casa_core.study.arm_estimate.ArmEstimate`, docs/departures.md).
+ESTIMATE_PERIOD = 1.0
 #: Shortest interval from a change of the predictive operator's keys to its next press, s.
 REFRACTORY = 0.25
+#: Longest the predictive operator holds keys before it lets go to watch the arm, s.
+BOUT = 1.0
 _SCALE = np.array([1.0, 1.0, 1.0, ROT_TO_METRES])  # [x, y, z, rot] with rot in metres
 _SCALE_FLOATS = tuple(_SCALE.tolist())
 
@@ -120,6 +130,7 @@ class SimulatedParticipant:
         self._steps = np.linalg.norm(np.diff(self._scaled, axis=0), axis=1)
         self._seen: deque[tuple[float, np.ndarray]] = deque()  # (t, state) not yet perceived
         self._perceived: np.ndarray | None = None
+        self._perceived_at = 0.0  # when the perceived state was the arm's
         self._noise = np.zeros(3)
         self._ar1: tuple[float, np.ndarray, float] | None = None
         self._progress = 0
@@ -131,7 +142,7 @@ class SimulatedParticipant:
         """The keys held during the tick starting at ``t``, given the arm's ``state``."""
         self._seen.append((t, np.asarray(state, dtype=float).copy()))
         while self._seen and self._seen[0][0] <= t - self.params.reaction_time + 1e-9:
-            self._perceived = self._seen.popleft()[1]
+            self._perceived_at, self._perceived = self._seen.popleft()
         if self._perceived is None or self.done:
             return frozenset()
         if t < self._lapse_until:
@@ -149,10 +160,10 @@ class SimulatedParticipant:
         return self._held
 
     def _perceive(self) -> np.ndarray:
-        # AR(1) position noise with a 0.5 s time constant, doubled along x (depth).
+        # AR(1) position noise with time constant NOISE_TIME, doubled along x (depth).
         if self._ar1 is None:  # (decay, scale, innovation scale), once per participant
-            decay = np.exp(-self.tick / 0.5)
-            scale = self.params.perception_noise * np.array([2.0, 1.0, 1.0])
+            decay = np.exp(-self.tick / NOISE_TIME)
+            scale = self.params.perception_noise * DEPTH_NOISE
             self._ar1 = (decay, scale, np.sqrt(1 - decay**2))
         decay, scale, root = self._ar1
         innovation = self.rng.standard_normal(3) * scale * root
@@ -214,82 +225,125 @@ class SimulatedParticipant:
 class PredictiveParticipant(SimulatedParticipant):
     """An operator who acts on where the arm is heading (module docstring, *predictive*).
 
-    Perception, lapses, wrong keys and the end of the task are those of
-    :class:`SimulatedParticipant`; only the error the keys answer differs. The
-    operator filters the perceived positions into a velocity, predicts the arm
-    :data:`LEAD_TIME` plus its own reaction time ahead and presses only when that
-    prediction leaves the path, or falls behind the point of the reference that far
-    ahead, by more than the deadband, and presses no sooner than :data:`REFRACTORY` after its
-    last change of keys.
+    Perception, lapses, wrong keys and the deadband's rule for choosing keys are those of
+    :class:`SimulatedParticipant`; the error the keys answer and the judgement that the task
+    is done differ. The operator knows the keys it holds (an efference copy) and estimates
+    the arm from them and from what it sees (:class:`~casa_core.study.arm_estimate.ArmEstimate`:
+    position, the drift the keys do not explain, the share of its keys' motion the arm
+    makes). From the estimate it bridges its own delay to *now*, and asks what displacement
+    its keys must still add, beyond the drift, to reach within :data:`LEAD_TIME` the point
+    of the reference that far ahead of the arm; it holds a key on an axis while that exceeds
+    the deadband, and presses no sooner than :data:`REFRACTORY` after its last change of
+    keys. It steers in bouts: after holding keys for ``bout`` seconds it lets go and
+    watches for its reaction time, the soonest it can see what the arm does without its
+    keys (intermittent control). A robot that carries the arm along then shows as drift
+    and saves it keys; one that pulls it away costs it keys.
+
+    Parameters
+    ----------
+    speed, rot_speed : float
+        What the operator's keys command, m/s and rad/s (the scene's ``teleop``).
+    bout : float, default BOUT
+        The longest it holds keys before watching, s; ``math.inf``: continuous control.
     """
 
-    def __init__(self, params: ParticipantParams, reference, *, rng, tick: float = 0.05):
+    def __init__(
+        self,
+        params: ParticipantParams,
+        reference,
+        *,
+        rng,
+        tick: float = 0.05,
+        speed: float = SPEED,
+        rot_speed: float = ROT_SPEED,
+        bout: float = BOUT,
+    ):
         super().__init__(params, reference, rng=rng, tick=tick)
+        if not bout > 0:
+            raise ValueError(f"bout = {bout} s: the longest bout of keys must be positive")
+        self.bout = float(bout)
         self._times = np.asarray(reference, dtype=float)[:, 0]
-        self._arc = np.concatenate([[0.0], np.cumsum(self._steps)])
-        self._tangents = unit_tangents(self._scaled)
-        self._velocity = np.zeros(4)
-        self._last: tuple[float, np.ndarray] | None = None
-        self._pushing = False
+        self._speeds = (float(speed), float(rot_speed))
+        self._estimate = ArmEstimate(
+            params.perception_noise * DEPTH_NOISE,  # as _perceive adds it
+            noise_decay=np.exp(-tick / NOISE_TIME),
+            period=ESTIMATE_PERIOD,
+            key_speed=[speed, speed, speed, rot_speed],
+        )
+        # The displacement the own keys commanded so far, and before each tick from the
+        # percept in hand on (t, displacement before t); the last percept taken.
+        self._commanded = np.zeros(4)
+        self._history: deque[tuple[float, np.ndarray]] = deque()
+        self._taken: tuple[float, np.ndarray] | None = None
         self._now = 0.0
         self._changed_at = -np.inf
+        self._bout_from = 0.0  # when the keys went down after none were held
+        self._watch_until = -np.inf
+        self._pulled_back = 0.0  # m the drift takes the arm back within LEAD_TIME
+
+    def keys(self, t: float, state) -> frozenset[str]:
+        self._history.append((t, self._commanded))
+        held = super().keys(t, state)
+        self._commanded = self._commanded + keys_to_action(held, *self._speeds) * self.tick
+        return held
 
     def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
+        now = self._now
+        if now < self._watch_until - 1e-9:
+            return frozenset()
+        if self._held and now - self._bout_from >= self.bout - 1e-9:
+            if self._pulled_back > self.params.deadband:
+                # Seen pulled off without its keys: no look needed, the bout goes on.
+                self._bout_from = now
+            else:
+                # The bout is over: let go, and watch until the arm without keys is seen.
+                self._watch_until = now + self.params.reaction_time
+                self._changed_at = now
+                return frozenset()
         chosen = super()._choose_keys(error)
         if chosen == self._held:
             return chosen
         # A press waits out the refractory interval of the last change; a release
         # never waits, and starts the interval like any other response.
-        if not chosen < self._held and self._now - self._changed_at < REFRACTORY - 1e-9:
+        if not chosen < self._held and now - self._changed_at < REFRACTORY - 1e-9:
             return self._held
-        self._changed_at = self._now
+        self._changed_at = now
+        if chosen and not self._held:
+            self._bout_from = now
         return chosen
 
-    @property
-    def horizon(self) -> float:
-        """How far ahead of its (delayed) perception the operator predicts, s."""
-        return self.params.reaction_time + LEAD_TIME
-
     def _error(self, perceived: np.ndarray, t: float) -> np.ndarray | None:
+        """The displacement the operator's keys must add within :data:`LEAD_TIME`."""
         self._now = t
-        ahead = self._track(perceived)
-        self._estimate_velocity(perceived, t)
-        if self._arrived(perceived, ahead):
+        now, drift = self._estimate_now(perceived, t)
+        ahead = self._track(now)
+        if self._arrived(now, ahead):
             return None
-        horizon = self.horizon
-        start = self._progress
-        last = len(self._scaled) - 1
-        # The predicted position's nearest path point, searched ahead of the progress.
-        stop = start + int(horizon / self.tick) + 40
-        here, nearest, offset = _kernels.predicted_offset(
-            self._scaled, _SCALE, perceived, self._velocity, horizon, start, stop
-        )
-        tangent = self._tangents[nearest]
-        along = dot(offset, tangent)
-        wanted = min(int(self._times.searchsorted(self._times[start] + horizon)), last)
-        behind = self._arc[wanted] - (self._arc[nearest] + along)
-        threshold = self.params.deadband
-        if wanted == last and abs(tangent[3]) > 0.5:
-            # Ending on a turn: done only within DONE_ROT_TOLERANCE of the end's angle.
-            threshold = min(threshold, DONE_ROT_TOLERANCE * ROT_TO_METRES)
-        threshold = threshold / 3 if self._pushing else threshold
-        self._pushing = bool(behind > threshold)
-        # Back to the path across it; when pushing, along it too.
-        correction = _kernels.correction(offset, tangent, along, behind, self._pushing)
-        if not self._pushing and wanted == last:
-            # Past the end now (not just predicted to arrive): back to the end.
-            beyond = dot(here - self._scaled[last], self._tangents[last])
-            if beyond > self.params.deadband:
-                correction -= beyond * self._tangents[last]
-        return correction / _SCALE
+        last = len(self._times) - 1
+        wanted = self._times.searchsorted(self._times[self._progress] + LEAD_TIME)
+        toward = self.reference[min(int(wanted), last)] - now
+        drifted = drift * LEAD_TIME
+        # How far the drift alone takes the arm back from where it wants to go.
+        distance = length(toward[:3] * _SCALE[:3])
+        self._pulled_back = -dot(drifted[:3], toward[:3]) / distance if distance > 0 else 0.0
+        return toward - drifted
 
-    def _estimate_velocity(self, perceived: np.ndarray, t: float) -> None:
-        # First-order low-pass of the perceived displacement per second (VELOCITY_FILTER).
-        if self._last is not None and t > self._last[0]:
-            elapsed = t - self._last[0]
-            raw = (perceived - self._last[1]) / elapsed
-            self._velocity += (1 - np.exp(-elapsed / VELOCITY_FILTER)) * (raw - self._velocity)
-        self._last = (t, perceived.copy())
+    def _estimate_now(self, perceived: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """The arm now, from the estimate at the percept and the own keys since; the drift."""
+        seen_at = self._perceived_at
+        while len(self._history) > 1 and self._history[1][0] <= seen_at + 1e-9:
+            self._history.popleft()
+        commanded_then = self._history[0][1]
+        estimate = self._estimate
+        if self._taken is None or seen_at > self._taken[0]:
+            before = commanded_then if self._taken is None else self._taken[1]
+            elapsed = seen_at - (seen_at if self._taken is None else self._taken[0])
+            estimate.update(perceived, commanded_then - before, elapsed)
+            self._taken = (seen_at, commanded_then)
+        assert estimate.position is not None  # updated above
+        since = self._commanded - commanded_then
+        drift = estimate.drift
+        return estimate.position + estimate.authority * since + drift * (t - seen_at), drift
 
 
 #: The operator models, by the name of config key ``simulation.operator``.
@@ -303,8 +357,15 @@ def make_participant(
     rng: np.random.Generator,
     tick: float = 0.05,
     operator: str,
+    speed: float = SPEED,
+    rot_speed: float = ROT_SPEED,
+    bout: float = BOUT,
 ) -> SimulatedParticipant:
     """The participant of operator model ``operator`` (a key of :data:`OPERATORS`).
+
+    ``speed`` and ``rot_speed`` are what its keys command (the scene's ``teleop``), which
+    the predictive operator knows; ``bout`` is its longest bout of keys
+    (:class:`PredictiveParticipant`).
 
     Examples
     --------
@@ -323,5 +384,9 @@ def make_participant(
     if operator not in OPERATORS:
         raise ValueError(
             f"unknown operator model {operator!r}; expected one of {', '.join(OPERATORS)}"
+        )
+    if operator == "predictive":
+        return PredictiveParticipant(
+            params, reference, rng=rng, tick=tick, speed=speed, rot_speed=rot_speed, bout=bout
         )
     return OPERATORS[operator](params, reference, rng=rng, tick=tick)

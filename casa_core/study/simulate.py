@@ -90,8 +90,15 @@ def _params(index: int, settings: StudySettings, params: ParticipantParams | Non
 
 def _run(scene, spec, settings: StudySettings, params, rng, pid, sim, **options):
     reference = intended_trajectory(spec.task, scene)
+    teleop = scene.teleop
     source = make_participant(
-        params, reference, rng=rng, tick=scene.teleop.dt, operator=settings.operator
+        params,
+        reference,
+        rng=rng,
+        tick=teleop.dt,
+        operator=settings.operator,
+        speed=teleop.speed,
+        rot_speed=teleop.rot_speed,
     )
     return run_trial(
         scene,

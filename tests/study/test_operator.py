@@ -11,6 +11,7 @@ import pytest
 from casa_core.analysis import metrics
 from casa_core.assist.tasks import intended_trajectory
 from casa_core.config import load_config
+from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import load_scene
 from casa_core.study import simulate
 from casa_core.study.closed_loop import run_trial
@@ -69,16 +70,22 @@ def test_assistance_toward_the_intended_goal_lets_the_operator_press_less(sim, m
     assert (totals[method] < 0.9 * totals["NA"]).all(), totals
 
 
-def test_assistance_toward_a_wrong_goal_makes_the_operator_push_back_and_still_arrive(sim):
+def test_assistance_toward_a_wrong_goal_makes_the_operator_push_back(sim):
     # Unknown Goal before learning: PBA assists the known green goal, 16 cm off the
     # participant's red path. Every participant holds its keys for more ticks than
-    # without assistance, the participants together press more keys, and every one still
-    # ends within the success radius of red before the study's time limit.
+    # without assistance, the participants together press more keys, and every one who
+    # holds two keys at once still ends within the success radius of red before the
+    # study's time limit. One key at a time gives a third to half of its speed under the
+    # blend, which the pull toward green can match: of the study's one-key participants
+    # 2 of 4 stay short (measured), as the one person the authors recorded stayed 0.61 m
+    # short of the unknown goal under PBA.
     presses = {"NA": 0, "PBA": 0}
     for index in PARTICIPANTS:
+        params = simulate.participant_params(index, SETTINGS.seed, SETTINGS.population)
         na = trial(sim, "unknown_goal", "NA", index)
         pulled = trial(sim, "unknown_goal", "PBA", index)
-        assert pulled[2], f"participant {index} did not end at red under PBA"
+        if params.max_keys > 1:
+            assert pulled[2], f"participant {index} did not end at red under PBA"
         assert pulled[1] > na[1], f"participant {index}: key ticks {pulled[1]} <= {na[1]}"
         presses["NA"] += na[0]
         presses["PBA"] += pulled[0]
@@ -114,17 +121,112 @@ def test_the_lookahead_model_stays_selectable_and_unchanged(sim):
     )
 
 
-def test_the_predictive_operator_lets_go_when_the_arm_moves_along_its_path():
-    # Kinematic check without pybullet: an arm seen moving along the path at the
-    # reference's speed, exactly on it and on schedule, needs no key; the same arm
-    # standing still at the start falls behind by the reference's speed times the
-    # horizon (0.05 m/s * 0.75 s = 3.75 cm > the 0.8 cm deadband) and gets one.
+def _held_ticks(operator, reference, carried: bool) -> np.ndarray:
+    """Per tick, whether ``operator`` holds a key while the arm is carried along the
+    reference whatever the keys (``carried``) or stands at its start."""
+    held = []
+    for row in reference:
+        state = row[1:] if carried else reference[0, 1:]
+        held.append(bool(operator.keys(row[0], state)))
+    return np.array(held)
+
+
+def test_the_predictive_operator_lets_go_once_it_has_seen_the_arm_carried():
+    # Kinematic check without pybullet: an arm carried along the path at the reference's
+    # speed, whatever the keys. While the operator holds a key it cannot tell the keys'
+    # share from the robot's; its bouts end in a look (its reaction time without keys),
+    # which shows the drift, and it lets go. An arm standing still at the start falls
+    # behind and gets keys bout after bout. In the last third of the path, after three
+    # bouts and their looks, the carried arm's operator holds keys on at most half as many
+    # ticks (measured 10 against 26), and its drift is the arm's velocity within 20%.
     reference = intended_trajectory("known_goal", SCENE)
-    moving = PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0))
+    carried = PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0))
     standing = PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0))
-    moving_keys = standing_keys = frozenset()
-    for row in reference[:60]:
-        moving_keys = moving.keys(row[0], row[1:])
-        standing_keys = standing.keys(row[0], reference[0, 1:])
-    assert moving_keys == frozenset()
-    assert standing_keys != frozenset()
+    third = len(reference) - len(reference) // 3
+    carried_held = _held_ticks(carried, reference, carried=True)[third:].sum()
+    standing_held = _held_ticks(standing, reference, carried=False)[third:].sum()
+    assert carried_held <= standing_held / 2, (carried_held, standing_held)
+    velocity = (reference[1, 1:4] - reference[0, 1:4]) / (reference[1, 0] - reference[0, 0])
+    error = np.linalg.norm(carried._estimate.drift[:3] - velocity) / np.linalg.norm(velocity)
+    assert error < 0.2, (carried._estimate.drift, velocity)
+
+
+def test_continuous_control_is_the_special_case_of_no_bout_limit():
+    # bout = inf: no look, so an operator whose arm stands still holds keys on every tick
+    # from its first press on; with the default bout it lets go once a bout.
+    reference = intended_trajectory("known_goal", SCENE)
+    continuous = PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0), bout=np.inf)
+    held = _held_ticks(continuous, reference, carried=False)
+    assert held[held.argmax() :].all()
+    intermittent = _held_ticks(
+        PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0)),
+        reference,
+        carried=False,
+    )
+    first = intermittent.argmax()
+    assert not intermittent[first:].all()
+    with pytest.raises(ValueError, match="bout = 0"):
+        PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0), bout=0)
+
+
+def _keyboard_floor(displacement: np.ndarray, max_keys: int) -> float:
+    """The shortest path from 0 to ``displacement`` with at most ``max_keys`` keys held,
+    each moving one axis at the same speed: steps along one axis (1 key), face diagonals
+    (2) or the cube's diagonal (3), each used as far as it goes."""
+    a, b, c = sorted(np.abs(displacement), reverse=True)
+    if max_keys == 1:
+        return a + b + c
+    if max_keys == 2:
+        if a >= b + c:
+            return np.sqrt(2) * (b + c) + (a - b - c)
+        return np.sqrt(2) * (a + b + c) / 2
+    return np.sqrt(3) * c + np.sqrt(2) * (b - c) + (a - b)
+
+
+OPPOSITE = {"x+": "x-", "x-": "x+", "y+": "y-", "y-": "y+", "z+": "z-", "z-": "z+"}
+OPPOSITE.update({"rot+": "rot-", "rot-": "rot+"})
+
+
+@pytest.mark.parametrize("scene_file", ["config/scene.yaml", "config/scene-original.yaml"])
+def test_without_assistance_the_operator_drives_near_the_shortest_path_its_keys_allow(scene_file):
+    # Known Goal under NA, the study's 11 participants, each on its own layout. A path
+    # can be no shorter than the keyboard allows (_keyboard_floor: one key at a time
+    # drives the L1 distance). The participants' median path is within 15% of it, and a
+    # held key is replaced by its opposite on the next tick fewer than twice a trial on
+    # average. Before the operator knew its own keys (it extrapolated the arm's velocity,
+    # its held keys included, and answered the prediction's error with the opposite
+    # key) the median was 1.81 (authors' layout) and 1.52 (ours) times the floor, with
+    # 69 and 38 such reversals; now 1.08 and 1.00, 11 and 12 (docs/departures.md).
+    scene = load_scene(scene_file)
+    reference = intended_trajectory("known_goal", scene)
+    displacement = reference[-1, 1:4] - reference[0, 1:4]
+    ratios, reversals = [], 0
+    with ArmSimulation(scene) as arm:
+        for index in PARTICIPANTS:
+            params = simulate.participant_params(index, SETTINGS.seed, SETTINGS.population)
+            source = make_participant(
+                params,
+                reference,
+                rng=np.random.default_rng([2021, index, 1]),
+                operator="predictive",
+            )
+            frame = run_trial(
+                scene,
+                "known_goal",
+                "NA",
+                source,
+                participant="p",
+                sim=arm,
+                max_duration=SETTINGS.max_duration,
+            ).frame
+            positions = frame[["x", "y", "z"]].to_numpy()
+            path = np.linalg.norm(np.diff(positions, axis=0), axis=1).sum()
+            ratios.append(path / _keyboard_floor(displacement, params.max_keys))
+            held = [set(k.split()) for k in frame["keys"].fillna("")]
+            reversals += sum(
+                OPPOSITE[key] in after
+                for before, after in zip(held[:-1], held[1:], strict=True)
+                for key in before
+            )
+    assert np.median(ratios) <= 1.15, ratios
+    assert reversals < 2 * len(PARTICIPANTS), reversals

@@ -1,13 +1,13 @@
 """The simulated operator's compiled geometry computes what its numpy formulas compute.
 
 ``casa_core.study._operator_kernels`` replaces, in the operator's tick, a window's
-``np.linalg.norm(..., axis=1).argmin()``, ``np.cumsum(...).searchsorted(...)`` and the predictive
-operator's arithmetic on 4-vectors. Each kernel is held to the numpy expression it replaces,
-bit for bit, on random inputs with ties and with distances equal to a partial sum (where
-``<`` and ``<=`` part). The operators are then held, tick by tick, to a copy written with
-the numpy formulas (the expressions the kernels replace): both see the same states (the
-reference path, off it, stopped, past its end), draw from equally seeded streams and must
-hold the same keys on every tick.
+``np.linalg.norm(..., axis=1).argmin()`` and ``np.cumsum(...).searchsorted(...)``. Each
+kernel is held to the numpy expression it replaces, bit for bit, on random inputs with
+ties and with distances equal to a partial sum (where ``<`` and ``<=`` part). The
+operators are then held, tick by tick, to a copy written with the numpy formulas (the
+expressions the kernels replace): both see the same states (the reference path, off it,
+stopped, past its end), draw from equally seeded streams and must hold the same keys on
+every tick.
 """
 
 from __future__ import annotations
@@ -50,29 +50,6 @@ def test_first_reaching_is_the_cumulative_sums_searchsorted():
             assert kernels.first_reaching(steps, start, distance) == expected
 
 
-def test_predicted_offset_and_correction_are_the_numpy_arithmetic():
-    rng = np.random.default_rng(2)
-    scale = part._SCALE
-    for _ in range(300):
-        scaled = rng.normal(0.0, 0.2, size=(50, 4))
-        perceived, velocity = rng.normal(0.0, 0.2, size=4), rng.normal(0.0, 0.1, size=4)
-        horizon, start = float(rng.uniform(0.4, 1.2)), int(rng.integers(50))
-        here, nearest, offset = kernels.predicted_offset(
-            scaled, scale, perceived, velocity, horizon, start, start + 40
-        )
-        predicted = perceived * scale + velocity * scale * horizon
-        window = scaled[start : start + 40]
-        expected = start + int(np.linalg.norm(window - predicted, axis=1).argmin())
-        assert nearest == expected
-        assert np.array_equal(here, perceived * scale)
-        assert np.array_equal(offset, predicted - scaled[expected])
-        tangent, along, behind = rng.normal(size=4), float(rng.normal()), float(rng.normal())
-        across = -(offset - along * tangent)
-        assert np.array_equal(kernels.correction(offset, tangent, along, behind, False), across)
-        pushed = across + behind * tangent / abs(tangent).max()
-        assert np.array_equal(kernels.correction(offset, tangent, along, behind, True), pushed)
-
-
 class NumpyLookahead(part.SimulatedParticipant):
     """The lookahead operator with its tick written in the numpy formulas."""
 
@@ -105,50 +82,9 @@ class NumpyLookahead(part.SimulatedParticipant):
 
 
 class NumpyPredictive(part.PredictiveParticipant):
-    """The predictive operator with its tick written in the numpy formulas."""
+    """The predictive operator with its path geometry written in the numpy formulas."""
 
     _track = NumpyLookahead._track
-
-    def _error(self, perceived, t):
-        self._now = t
-        ahead = self._track(perceived)
-        self._estimate_velocity(perceived, t)
-        if self._arrived(perceived, ahead):
-            return None
-        horizon, scale = self.horizon, part._SCALE
-        here = perceived * scale
-        predicted = here + self._velocity * scale * horizon
-        start, last = self._progress, len(self._scaled) - 1
-        window = self._scaled[start : start + int(horizon / self.tick) + 40]
-        nearest = start + int(np.linalg.norm(window - predicted, axis=1).argmin())
-        tangent = self._tangents[nearest]
-        offset = predicted - self._scaled[nearest]
-        along = float(offset @ tangent)
-        correction = -(offset - along * tangent)
-        wanted = min(int(self._times.searchsorted(self._times[start] + horizon)), last)
-        behind = self._arc[wanted] - (self._arc[nearest] + along)
-        threshold = self.params.deadband
-        if wanted == last and abs(tangent[3]) > 0.5:
-            threshold = min(threshold, part.DONE_ROT_TOLERANCE * part.ROT_TO_METRES)
-        threshold = threshold / 3 if self._pushing else threshold
-        self._pushing = behind > threshold
-        if self._pushing:
-            correction += behind * tangent / abs(tangent).max()
-        elif wanted == last:
-            beyond = float((here - self._scaled[last]) @ self._tangents[last])
-            if beyond > self.params.deadband:
-                correction -= beyond * self._tangents[last]
-        return correction / scale
-
-    def _choose_keys(self, error):
-        chosen = NumpyLookahead._choose_keys(self, error)
-        # The refractory interval, as PredictiveParticipant._choose_keys applies it.
-        if chosen == self._held:
-            return chosen
-        if not chosen < self._held and self._now - self._changed_at < part.REFRACTORY - 1e-9:
-            return self._held
-        self._changed_at = self._now
-        return chosen
 
 
 def _states(reference, rng):
