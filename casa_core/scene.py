@@ -117,6 +117,10 @@ class Scene:
         Optional: the cameras the scene pins, by view (:data:`~casa_core.vocabulary.VIEWS`:
         ``window``, ``figure``); a view not pinned frames the scene's positions
         (:func:`casa_core.robot.camera.scene_camera`).
+    trial_length : float or None
+        Optional (s): every trial runs exactly this long, and an operator who has arrived
+        waits with no key held until it ends (the original's protocol, 15 s). None
+        (default): a trial ends when the operator is done, or at its time limit.
     """
 
     start: Start
@@ -127,6 +131,7 @@ class Scene:
     goals_elsewhere: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     via: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     view: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    trial_length: float | None = None
 
     @property
     def start_state(self) -> np.ndarray:
@@ -173,7 +178,10 @@ class Scene:
         """Validate a parsed scene file; ``source`` names it in errors."""
         reader = _Reader(source)
         top = reader.mapping(
-            data, "", ("start", "goals", "pouring", "teleop"), ("point", *POINTS, "via", "view")
+            data,
+            "",
+            ("start", "goals", "pouring", "teleop"),
+            ("point", *POINTS, "via", "view", "trial_length"),
         )
         point = top.get("point", POINTS[0])
         if point not in POINTS:
@@ -203,6 +211,9 @@ class Scene:
             for name in named:
                 if name not in goals:
                     reader.fail(f"{other}.{name}", f"not a goal of the scene ({', '.join(goals)})")
+        trial_length = top.get("trial_length")
+        if trial_length is not None:
+            trial_length = reader.number(top, "trial_length", positive=True)
         return cls(
             start=Start(
                 reader.vector(start, "start.position"),
@@ -234,6 +245,7 @@ class Scene:
                     for other, named in elsewhere.items()
                 }
             ),
+            trial_length=trial_length,
         )
 
 

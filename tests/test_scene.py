@@ -117,3 +117,14 @@ def test_the_via_green_reading_passes_green_as_near_as_our_layout():
 def test_bad_via_positions_are_named(via, message):
     with pytest.raises(SceneError, match=message):
         Scene.from_dict(scene_data(via=via), "x.yaml")
+
+
+def test_a_fixed_trial_length_is_read_and_checked():
+    # The authors' scenes run the original's 15 s protocol; ours ends trials when done.
+    assert load_scene().trial_length is None
+    for name in ("scene-original.yaml", "scene-original-via-green.yaml"):
+        assert load_scene(CONFIG / name).trial_length == 15.0
+    assert Scene.from_dict(scene_data(trial_length=20)).trial_length == 20.0
+    for bad, rule in ((0, "must be positive"), ("15 s", "must be a finite number")):
+        with pytest.raises(SceneError, match=f"x.yaml: trial_length: {rule}"):
+            Scene.from_dict(scene_data(trial_length=bad), "x.yaml")

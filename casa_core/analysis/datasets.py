@@ -59,9 +59,11 @@ TRIAL_COLUMNS = (
     # The trial's flags (metadata "flags", space-separated; io.contract.TRIAL_FLAGS).
     "flags",
     # Whether the trial ran to its time limit (empty when its log does not say the
-    # limit) and whether it ended where the task intends (casa_core.analysis.metrics).
+    # limit), whether it ended where the task intends and since when it stayed there
+    # (empty when it did not; casa_core.analysis.metrics).
     "timed_out",
     "success",
+    "arrival",
 )
 STEP_COLUMNS = (
     "participant",

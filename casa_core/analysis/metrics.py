@@ -39,6 +39,18 @@ For a trial logged at ticks ``t_0 < ... < t_{n-1}`` with end-effector positions
   reached: a trial that ran out of time succeeds when its pose at the limit meets
   these bounds (an operator still fine-tuning the tilt), and fails otherwise (an
   arm held at another goal).
+- **arrival** (s): the time of the first tick from which the pose stays within the
+  bounds of success to the trial's end (:func:`arrival_time`); None when the trial
+  does not succeed.
+
+*Under a fixed trial length* (a scene's ``trial_length``, the original's 15 s protocol)
+every trial runs to its limit: ``duration`` is that length and ``timed_out`` is true for
+every trial, so neither says how fast the task was done; ``arrival`` does. ``success`` is
+the pose at the limit, so an arm that arrived and was then pulled away fails. ``error``
+sums over the whole length: waiting at the task's end adds nothing (the reference waits
+there too), an arm short of it adds its distance every tick until the end. The
+efficiency cost gains nothing from standing still, and ``effort`` counts every press,
+those made while waiting included.
 
 Both error sums and the efficiency cost grow with the number of ticks, as the
 paper's sums do; compare them only across trials logged at the same tick rate.
@@ -264,6 +276,36 @@ def task_success(executed: np.ndarray, intended: np.ndarray) -> bool:
     return close and bool(abs(end[3] - target[3]) <= POUR_TILT_TOLERANCE + 1e-12)
 
 
+def arrival_time(executed: np.ndarray, intended: np.ndarray) -> float | None:
+    """When a trial arrived for good: the first tick from which every pose to the last
+    meets the bounds of :func:`task_success`; None when the last one does not.
+
+    Parameters
+    ----------
+    executed, intended : ndarray, shape (n, 5) and (m, 5)
+        Rows ``[t, x, y, z, rot]``.
+
+    Examples
+    --------
+    In at 2 s, out at 3 s, in again from 4 s:
+
+    >>> intended = np.array([[0.0, 0, 0, 0, 0], [6.0, 0.3, 0, 0, 0]])
+    >>> x = [0.0, 0.1, 0.28, 0.2, 0.29, 0.3]
+    >>> executed = np.column_stack([np.arange(6.0), x, np.zeros((6, 3))])
+    >>> arrival_time(executed, intended)
+    4.0
+    >>> arrival_time(executed[:4], intended) is None
+    True
+    """
+    executed = np.asarray(executed, dtype=float)
+    first = None
+    for k in range(len(executed) - 1, -1, -1):
+        if not task_success(executed[k : k + 1], intended):
+            break
+        first = k
+    return None if first is None else float(executed[first, 0])
+
+
 def trial_metrics(
     frame: pd.DataFrame,
     intended: np.ndarray,
@@ -289,7 +331,7 @@ def trial_metrics(
     -------
     dict
         ``error, error_rot, efficiency, efficiency_rot, effort, effort_ticks,
-        duration, ticks, timed_out, success``.
+        duration, ticks, timed_out, success, arrival``.
 
     Examples
     --------
@@ -298,8 +340,8 @@ def trial_metrics(
     >>> result = trial_metrics(frame, frame[["t", "x", "y", "z", "rot"]].to_numpy(), dt=0.5)
     >>> result["error"], result["effort"], result["effort_ticks"], result["duration"]
     (0.0, 1, 2, 1.0)
-    >>> result["success"], result["timed_out"]
-    (True, None)
+    >>> result["success"], result["timed_out"], result["arrival"]  # within 5 cm from 0.5 s
+    (True, None, 0.5)
     """
     executed = frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float)
     error, error_rot = trajectory_error(executed, intended, dt=dt)
@@ -315,6 +357,7 @@ def trial_metrics(
         "ticks": len(t),
         "timed_out": timed_out(float(t[-1]), max_duration, dt=dt),
         "success": task_success(executed, intended),
+        "arrival": arrival_time(executed, intended),
     }
 
 

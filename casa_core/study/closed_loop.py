@@ -7,7 +7,9 @@ held, turns them into the user's action (the paper's direct teleoperation T), le
 drives the arm with the blend for one tick, the way the scene's ``teleop.mode`` says
 (:mod:`casa_core.study.drive`). Every 0.5 s (twice per second, as in
 the paper) the assistant first updates its inference with the state reached. The trial
-ends when the key source says it is done or at ``max_duration``.
+ends when the key source says it is done or at ``max_duration``; in a scene with a
+``trial_length`` (the original's protocol) it runs exactly that long, whatever the source
+says.
 
 The methods are the paper's: NA (direct teleoperation; the assistant still infers, so
 the log shows what it would have believed), PBA (policy blending with distance
@@ -145,7 +147,8 @@ def run_trial(
         ``familiarization``, ``known_goal``, ``unknown_goal`` or ``unknown_skill``.
     method : {"NA", "PBA", "CASA", "BELIEF"}
     source : KeySource
-        Gives the held keys each tick; the trial ends when ``source.done`` turns true.
+        Gives the held keys each tick; the trial ends when ``source.done`` turns true,
+        unless the scene fixes the trial's length (``scene.trial_length``).
     participant : str
         Participant id written to the log.
     intents : sequence of Intent, optional
@@ -155,7 +158,8 @@ def run_trial(
         Log phase; default :func:`default_phase` of the task.
     source_kind : {"simulated", "human"}
     max_duration : float
-        Seconds after which the trial stops even if the source is not done.
+        Seconds after which the trial stops even if the source is not done; a scene's
+        ``trial_length`` takes its place.
     sim : ArmSimulation, optional
         Simulation to run in (e.g. a window); default a new headless one, closed after.
     inference : Preset or str, default "casa"
@@ -181,13 +185,16 @@ def run_trial(
         intents = known_goal_intents(scene, **inference.goal_options())
     intents = list(intents)
     ticks_per_inference = inference_ticks(scene)
+    until_done = scene.trial_length is None
+    if not until_done:
+        max_duration = scene.trial_length
     assistant = trial_assistant(scene, method, intents, inference, assistant_options)
     own_sim = sim is None
     if sim is None:
         sim = ArmSimulation(scene)
     try:
         rows = _closed_loop(
-            sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick
+            sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick, until_done
         )
     finally:
         if own_sim:
@@ -271,7 +278,9 @@ def trial_meta(
     return meta
 
 
-def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick):
+def _closed_loop(
+    sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick, until_done
+):
     dt = scene.teleop.dt
     drive = scene_drive(sim, scene)
     state = drive.start()
@@ -304,7 +313,13 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
         if on_tick is not None:
             on_tick(t, state, held, alpha)
         # A trial ended at once still has its start and one tick (the log's two-rows rule).
-        if tick > 0 and getattr(source, "done", False):
+        if tick > 0 and _ends(source, until_done):
             break
         state = drive.tick(assistant, state, held, (tick % ticks_per_inference) * dt)
     return rows
+
+
+def _ends(source, until_done: bool) -> bool:
+    """Whether the source ends the trial: when done, or, in a trial of fixed length, only
+    when it stops it (a person's pause, ``paused``)."""
+    return bool(getattr(source, "done" if until_done else "paused", False))

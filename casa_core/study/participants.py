@@ -8,7 +8,9 @@ noise, steers toward a point a little ahead on the path, holds a key while the
 error along that axis exceeds a deadband, lapses now and then, and sometimes
 presses a wrong key. When assistance pulls the arm off the path the error grows
 and the participant presses against it, so assisting for the wrong intent costs
-effort, as it does for a person.
+effort, as it does for a person. Once it sees itself at the path's end it is ``done``
+and lets go; where the trial goes on (a scene's fixed ``trial_length``) it waits there,
+watching, and steers back if the arm is seen to leave.
 
 Population parameters (fixed before any result was looked at; distributions in
 ``config/config.yaml`` under ``simulation.population``): ``reaction_time`` (s),
@@ -48,6 +50,10 @@ NOISE_TIME = 0.5
 DEPTH_NOISE = np.array([2.0, 1.0, 1.0])
 LOOKAHEAD = 0.04  # m of path ahead that the participant steers toward
 DONE_ROT_TOLERANCE = 0.15  # rad
+#: A held key goes up at a third of the deadband (hysteresis); by the same ratio, an
+#: operator waiting at the path's end steers again only when it sees the arm three times
+#: as far from the end as arriving took (three deadbands, three rotation tolerances).
+HYSTERESIS = 3.0
 #: The predictive operator's lead time constant T_L, s (docs/departures.md).
 LEAD_TIME = 0.5
 #: Natural period of the predictive operator's estimate of the arm's drift, s
@@ -143,7 +149,7 @@ class SimulatedParticipant:
         self._seen.append((t, np.asarray(state, dtype=float).copy()))
         while self._seen and self._seen[0][0] <= t - self.params.reaction_time + 1e-9:
             self._perceived_at, self._perceived = self._seen.popleft()
-        if self._perceived is None or self.done:
+        if self._perceived is None:
             return frozenset()
         if t < self._lapse_until:
             return self._held
@@ -152,11 +158,10 @@ class SimulatedParticipant:
             return self._held
         perceived = self._perceive()
         error = self._error(perceived, t)
-        if error is None:
-            self.done = True
-            self._held = frozenset()
-            return self._held
-        self._held = self._choose_keys(error)
+        # Done while it judges itself arrived: it lets go and watches, and steers again
+        # if the arm is seen to leave (a trial of fixed length goes on after arrival).
+        self.done = error is None
+        self._held = frozenset() if error is None else self._choose_keys(error)
         return self._held
 
     def _perceive(self) -> np.ndarray:
@@ -190,12 +195,14 @@ class SimulatedParticipant:
         return int(ahead)
 
     def _arrived(self, perceived: np.ndarray, ahead: int) -> bool:
-        """Whether the steering point is the path's end and the arm is seen there."""
+        """Whether the steering point is the path's end and the arm is seen there (within
+        the deadband; once arrived, within :data:`HYSTERESIS` deadbands)."""
         final = self.reference[-1]
+        scale = HYSTERESIS if self.done else 1.0
         return bool(
             ahead >= len(self.reference) - 1
-            and length(perceived[:3] - final[:3]) < self.params.deadband
-            and abs(perceived[3] - final[3]) < DONE_ROT_TOLERANCE
+            and length(perceived[:3] - final[:3]) < self.params.deadband * scale
+            and abs(perceived[3] - final[3]) < DONE_ROT_TOLERANCE * scale
         )
 
     def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
@@ -204,7 +211,8 @@ class SimulatedParticipant:
         magnitude = [abs(e) * s for e, s in zip(error, _SCALE_FLOATS, strict=True)]
         # Hysteresis: a held key stays down until the error falls to a third of the deadband.
         deadband, held = self.params.deadband, self._held
-        thresholds = [deadband / 3 if held.intersection(pair) else deadband for pair in AXIS_KEYS]
+        released = deadband / HYSTERESIS
+        thresholds = [released if held.intersection(pair) else deadband for pair in AXIS_KEYS]
         # Largest first, ties in axis order (as np.argsort sorts 4 numbers).
         order = sorted(range(4), key=lambda axis: -magnitude[axis])
         wanted = [axis for axis in order if magnitude[axis] > thresholds[axis]]

@@ -216,7 +216,12 @@ class _Runner:
         label = label_of(spec, self.record.index)
         # Planned before the instructions, on a waiting screen of its own.
         intents = self._learned_intents() if spec.phase == "after_learning" else None
-        title, body = texts.instructions(spec, label, demonstrations=settings.demonstrations)
+        title, body = texts.instructions(
+            spec,
+            label,
+            demonstrations=settings.demonstrations,
+            trial_length=self.scene.trial_length,
+        )
         if window.instructions(title, body, spec.task) == "pause":
             return "pause"
         window.preview(spec.task, intended_trajectory(spec.task, self.scene), settings.preview)
@@ -249,7 +254,8 @@ class _Runner:
         )
         stem = self.record.write_trial(spec, result)
         seconds = float(result.frame["t"].iloc[-1])
-        ended = "Enter" if source.done else "time limit"
+        by_enter = source.done and self.scene.trial_length is None
+        ended = "Enter" if by_enter else "time limit"
         self.log(
             f"recorded {stem.name} ({shown}, method {spec.method}): {seconds:.1f} s, ended by "
             f"{ended}, loop rate {100 * rate:.1f}% of real time (slowest 2 s "
@@ -261,7 +267,7 @@ class _Runner:
                 f"({100 * rate:.1f}% over the trial, {100 * slowest:.1f}% in its slowest 2 s): "
                 "the arm moved slower than commanded"
             )
-        window.end_trial("Finished. Saved." if source.done else "Time is up. Saved.")
+        window.end_trial("Finished. Saved." if by_enter else "Time is up. Saved.")
         return None
 
     def _questions(self, spec) -> str | None:

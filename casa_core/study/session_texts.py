@@ -32,10 +32,15 @@ STATEMENTS = {
     "useful": "The help {robot} gave was useful.",
 }
 _DONE = "Press Enter as soon as you are done."
+#: The same under a fixed trial length (a scene's ``trial_length``), where Enter does not end it.
+_FIXED = "The task stops by itself after {seconds:g} s: once there, wait with no key pressed."
 
 
-def instructions(spec: TrialSpec, label: str | None, *, demonstrations: int) -> tuple[str, str]:
-    """The title and the text shown before a trial.
+def instructions(
+    spec: TrialSpec, label: str | None, *, demonstrations: int, trial_length: float | None = None
+) -> tuple[str, str]:
+    """The title and the text shown before a trial; ``trial_length`` (s), if given, is
+    the fixed length of every trial (the scene's), said in place of "press Enter".
 
     Examples
     --------
@@ -46,9 +51,13 @@ def instructions(spec: TrialSpec, label: str | None, *, demonstrations: int) -> 
     'Task: move the cup to the green ball'
     >>> body.splitlines()[0]
     'This time robot B helps you: it may move the arm too.'
+    >>> spec = TrialSpec("known_goal", "NA", "no_misspecification")
+    >>> instructions(spec, None, demonstrations=5, trial_length=15.0)[1].split(". ")[-1]
+    'The task stops by itself after 15 s: once there, wait with no key pressed.'
     """
     goal = GOALS[spec.task]
-    where = f"The target is highlighted in yellow and marked TARGET. {_DONE}"
+    done = _DONE if trial_length is None else _FIXED.format(seconds=trial_length)
+    where = f"The target is highlighted in yellow and marked TARGET. {done}"
     if spec.phase == "familiarization":
         return (
             "Practice",

@@ -69,8 +69,12 @@ def test_trials_rows_are_the_metrics_of_each_log(raw, tmp_path):
     row = trials.loc["p02/unknown_skill_PBA_before_learning"]
     flags = {"timed_out", "success"}
     for key, value in expected.items():
-        if key not in flags:
-            assert row[key] == pytest.approx(value, rel=1e-12)
+        if key in flags:
+            continue
+        if value is None:  # arrival, of a trial that does not succeed
+            assert pd.isna(row[key]), key
+        else:
+            assert row[key] == pytest.approx(value, rel=1e-12), key
     # The synthetic logs do not say their time limit: timed_out stays empty.
     assert expected["timed_out"] is None and pd.isna(row["timed_out"])
     assert row["success"] == expected["success"]
@@ -155,10 +159,10 @@ def test_a_dataset_without_na_or_surveys_still_builds(tmp_path):
     assert tables.likert.empty
 
 
-def test_trials_end_with_timed_out_and_success(raw, tmp_path):
+def test_trials_end_with_timed_out_success_and_arrival(raw, tmp_path):
     process(raw, tmp_path, SCENE)
     header = (tmp_path / "trials.csv").read_text().splitlines()[0].split(",")
-    assert header[-2:] == ["timed_out", "success"]
+    assert header[-3:] == ["timed_out", "success", "arrival"]
     trials = read_table(tmp_path / "trials.csv")
     assert trials["timed_out"].isna().all()  # no log says its limit
     # Each row's success is task_success of its log against its task's intended end.
@@ -167,6 +171,12 @@ def test_trials_end_with_timed_out_and_success(raw, tmp_path):
         executed = frame[["t", "x", "y", "z", "rot"]].to_numpy()
         intended = tasks.intended_trajectory(row.task, SCENE)
         assert row.success == metrics.task_success(executed, intended), row.trial
+        # Arrival: empty exactly when the trial fails, else a tick's t no later than the end.
+        if row.success:
+            assert row.arrival == metrics.arrival_time(executed, intended), row.trial
+            assert row.arrival in set(frame["t"]) and row.arrival <= row.duration
+        else:
+            assert pd.isna(row.arrival), row.trial
 
 
 def test_timed_out_comes_from_the_logged_limit(tmp_path):

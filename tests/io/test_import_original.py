@@ -392,7 +392,9 @@ def test_the_scene_holds_link7_and_the_tool_points_of_the_reference_angles():
         "tool",
         "pouring",
         "teleop",
+        "trial_length",
     }
+    assert scene.trial_length == 15.0  # the original's trials stop at 15 s
 
 
 @pytest.mark.pipeline

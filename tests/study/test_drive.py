@@ -9,6 +9,8 @@ joint velocities plus (1 - alpha) times the robot's.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -134,7 +136,9 @@ def test_without_assistance_the_arm_gets_the_described_joint_command(monkeypatch
         return original_step(sim, qdot)
 
     monkeypatch.setattr(ArmSimulation, "step_joints", recording_step)
-    run_trial(ORIGINAL_SCENE, "known_goal", "NA", Scripted(), participant="p")
+    # Until the script is done, not the scene's fixed 15 s.
+    until_done = dataclasses.replace(ORIGINAL_SCENE, trial_length=None)
+    run_trial(until_done, "known_goal", "NA", Scripted(), participant="p")
     assert len(sent) == len(script)
     np.testing.assert_allclose(np.array(sent), np.array(reference), rtol=0, atol=1e-6)
 

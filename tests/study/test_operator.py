@@ -5,6 +5,8 @@ Participants are the study's own draws (config/config.yaml: its 11 participants,
 differs, and with the study's time limit.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -183,6 +185,13 @@ def _keyboard_floor(displacement: np.ndarray, max_keys: int) -> float:
     return np.sqrt(3) * c + np.sqrt(2) * (b - c) + (a - b)
 
 
+def _study_participant(index, reference):
+    """Participant ``index`` of the study's population, predictive, on its own stream."""
+    params = simulate.participant_params(index, SETTINGS.seed, SETTINGS.population)
+    rng = np.random.default_rng([2021, index, 1])
+    return params, make_participant(params, reference, rng=rng, operator="predictive")
+
+
 OPPOSITE = {"x+": "x-", "x-": "x+", "y+": "y-", "y-": "y+", "z+": "z-", "z-": "z+"}
 OPPOSITE.update({"rot+": "rot-", "rot-": "rot+"})
 
@@ -197,19 +206,14 @@ def test_without_assistance_the_operator_drives_near_the_shortest_path_its_keys_
     # its held keys included, and answered the prediction's error with the opposite
     # key) the median was 1.81 (authors' layout) and 1.52 (ours) times the floor, with
     # 69 and 38 such reversals; now 1.08 and 1.00, 11 and 12 (docs/departures.md).
-    scene = load_scene(scene_file)
+    # The path's shape, not the protocol's: trials run until the operator is done.
+    scene = dataclasses.replace(load_scene(scene_file), trial_length=None)
     reference = intended_trajectory("known_goal", scene)
     displacement = reference[-1, 1:4] - reference[0, 1:4]
     ratios, reversals = [], 0
     with ArmSimulation(scene) as arm:
         for index in PARTICIPANTS:
-            params = simulate.participant_params(index, SETTINGS.seed, SETTINGS.population)
-            source = make_participant(
-                params,
-                reference,
-                rng=np.random.default_rng([2021, index, 1]),
-                operator="predictive",
-            )
+            params, source = _study_participant(index, reference)
             frame = run_trial(
                 scene,
                 "known_goal",
@@ -230,3 +234,70 @@ def test_without_assistance_the_operator_drives_near_the_shortest_path_its_keys_
             )
     assert np.median(ratios) <= 1.15, ratios
     assert reversals < 2 * len(PARTICIPANTS), reversals
+
+
+def test_an_operator_that_has_arrived_waits_and_steers_back_when_the_arm_is_moved_away():
+    # Kinematic check without pybullet: the arm carried along the reference to its end and
+    # held there for 6 s (the drift estimate settles: no key in the last 2 s), then moved
+    # along y. Arrival is judged within the deadband; a
+    # waiting operator steers again only beyond HYSTERESIS (3) deadbands: at 1.5 it keeps
+    # waiting for 4 s with no key, at 5 it presses toward the end (y-) within half a second
+    # (its reaction time, 0.25 s, and the estimate's lag: measured 0.3 s).
+    reference = intended_trajectory("known_goal", SCENE)
+    end = reference[-1, 1:]
+    for moved, expect_keys in ((1.5, False), (5.0, True)):
+        operator = PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0))
+        _held_ticks(operator, reference, carried=True)
+        t = reference[-1, 0] + 0.05 * np.arange(1, 121)
+        waiting = [operator.keys(ti, end) for ti in t]
+        assert not any(waiting[80:]) and operator.done  # no key in the last 2 s
+        away = end + np.array([0.0, moved * EXPERT.deadband, 0.0, 0.0])
+        held = [operator.keys(ti, away) for ti in t[-1] + 0.05 * np.arange(1, 81)]
+        if not expect_keys:
+            assert not any(held) and operator.done
+            continue
+        first = next(i for i, keys in enumerate(held) if keys)
+        assert first * 0.05 <= 0.5 and "y-" in held[first] and not operator.done
+
+
+class _Watched:
+    """A key source that records, tick by tick, whether its operator judged itself done."""
+
+    def __init__(self, source):
+        self.source, self.dones = source, []
+
+    def keys(self, t, state):
+        held = self.source.keys(t, state)
+        self.dones.append(self.source.done)
+        return held
+
+    @property
+    def done(self):
+        return self.source.done
+
+
+def test_in_a_trial_of_fixed_length_the_operators_wait_once_arrived():
+    # The authors' setup runs the original's 15 s trials. Known Goal under CASA, the
+    # study's 11 participants: every trial lasts 15 s, at least 9 operators arrive
+    # (measured 11), and after its first arrival an operator holds keys on at most 5% of
+    # the ticks left (measured 2.6%: steering back when its estimate, not the arm, strays).
+    scene = load_scene("config/scene-original.yaml")
+    reference = intended_trajectory("known_goal", scene)
+    arrived, after, with_keys = 0, 0, 0
+    with ArmSimulation(scene) as arm:
+        for index in PARTICIPANTS:
+            watched = _Watched(_study_participant(index, reference)[1])
+            frame = run_trial(
+                scene, "known_goal", "CASA", watched, participant="p", sim=arm, max_duration=40
+            ).frame
+            assert frame["t"].iloc[-1] == 15.0
+            if any(watched.dones):
+                first = watched.dones.index(True)
+                keys = frame["keys"].fillna("").iloc[first:]
+                arrived, after, with_keys = (
+                    arrived + 1,
+                    after + len(keys),
+                    with_keys + (keys != "").sum(),
+                )
+    assert arrived >= 9, arrived
+    assert with_keys <= 0.05 * after, (with_keys, after)

@@ -158,3 +158,34 @@ def test_a_trial_ended_at_once_still_writes_a_valid_log(scene, tmp_path):
     result.write(stem)
     assert validate_paths([tmp_path]) == []
     assert read_trial(stem)[1]["t"].tolist() == [0.0, 0.05]
+
+
+def test_a_trial_of_fixed_length_runs_its_length_whatever_the_source_says(scene):
+    # The original's protocol (a scene's trial_length): a source done after 1 s, or never,
+    # gives a trial of exactly 3 s (61 ticks of 0.05 s); max_duration gives way to it.
+    fixed = dataclasses.replace(scene, trial_length=3.0)
+    for script in ([(1.0, ["x+"])], []):
+        result = run_trial(fixed, "known_goal", "NA", ScriptedKeys(script), participant="s")
+        t = result.frame["t"]
+        assert len(t) == 61 and t.iloc[-1] == 3.0 and result.meta["max_duration"] == 3.0
+    # The arm moved 5 cm in the second of keys and stood still after it.
+    frame = run_trial(
+        fixed, "known_goal", "NA", ScriptedKeys([(1.0, ["x+"])]), participant="s"
+    ).frame
+    assert frame["x"].iloc[-1] - frame["x"].iloc[0] == pytest.approx(0.05, abs=0.002)
+    # Settled within 0.1 mm a quarter second after the keys.
+    assert frame["x"].iloc[-1] == pytest.approx(frame["x"].iloc[25], abs=1e-4)
+    # Without it, the same source ends the trial when done: at 1 s, 21 rows.
+    ended = run_trial(scene, "known_goal", "NA", ScriptedKeys([(1.0, ["x+"])]), participant="s")
+    assert len(ended.frame) == 21
+
+
+def test_a_pause_still_ends_a_trial_of_fixed_length(scene):
+    class Paused(ScriptedKeys):
+        def keys(self, t, state):
+            self.paused = self.done = t >= 0.5
+            return frozenset()
+
+    fixed = dataclasses.replace(scene, trial_length=3.0)
+    result = run_trial(fixed, "known_goal", "NA", Paused([]), participant="s")
+    assert result.frame["t"].iloc[-1] == 0.5
