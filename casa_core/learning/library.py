@@ -199,11 +199,7 @@ def save_intent(
             {"name": n, "position": p.tolist()}
             for n, p in zip(intent.object_names, intent.objects, strict=True)
         ],
-        "network": {
-            "inputs": len(intent.features),
-            "hidden": config.hidden,
-            "negative_slope": config.negative_slope,
-        },
+        "network": _network_spec(intent),
         "cost_scale": intent.cost_scale,
         "cost_offset": intent.cost_offset,
         "length_scale": intent.length_scale,
@@ -218,6 +214,21 @@ def save_intent(
     payload["checksum"] = hashlib.sha256(_canonical(payload)).hexdigest()
     text = json.dumps(payload, indent=1, sort_keys=True, allow_nan=False) + "\n"
     return atomic_write_text(path, text)
+
+
+def _network_spec(intent: NeuralIntent) -> dict:
+    """The network's shape as the file stores it, read from the network itself."""
+    import torch
+
+    first = intent.network[0]
+    slopes = {m.negative_slope for m in intent.network if isinstance(m, torch.nn.LeakyReLU)}
+    if not isinstance(first, torch.nn.Linear) or len(slopes) != 1:
+        raise ValueError("a learned intent's network starts with a Linear layer, one leaky slope")
+    return {
+        "inputs": first.in_features,
+        "hidden": first.out_features,
+        "negative_slope": slopes.pop(),
+    }
 
 
 def _require(path: Path, ok: bool, rule: str, message: str) -> None:

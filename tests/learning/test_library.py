@@ -494,3 +494,26 @@ def test_the_listing_says_why_training_stopped_and_which_iteration_the_file_keep
     help_text = " ".join(run_casa("library", "list", "--help").stdout.split())
     assert "budget: it ran all its iterations, as it usually does" in help_text
     assert "learning.csv: endpoint_error_m" in help_text
+
+
+def test_the_stored_network_shape_is_the_networks_not_the_configs(tmp_path):
+    # An intent whose network has 8 hidden units and slope 0.2, saved with the default
+    # config (32 and 0.01): the file says the network's shape, and loads to the same cost.
+    config = IRLConfig()
+    network = cost_network(len(feature_names(OBJECTS)), hidden=8, negative_slope=0.2, seed=0)
+    intent = make_intent()
+    intent = NeuralIntent(
+        intent.name,
+        network,
+        objects=OBJECTS,
+        cost_scale=config.cost_scale,
+        length_scale=config.length_scale,
+        guides=intent.guides,
+        cost_offset=1.25,
+    )
+    assert (config.hidden, config.negative_slope) != (8, 0.2)
+    entry = library.load_intent(save(tmp_path, intent))
+    assert entry.metadata["network"]["hidden"] == 8
+    assert entry.metadata["network"]["negative_slope"] == 0.2
+    states = np.random.default_rng(0).uniform([0.2, -0.4, 0.1, -1], [0.7, 0.3, 0.5, 2], (20, 4))
+    np.testing.assert_array_equal(entry.intent.costs_of(states), intent.costs_of(states))
