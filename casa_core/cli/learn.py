@@ -52,7 +52,9 @@ def _learn(args) -> int:
 
     config = IRLConfig()
     if args.max_iterations is not None:
-        config = IRLConfig(max_iterations=args.max_iterations)
+        # Fewer iterations than the convergence test waits for: it waits for all of them.
+        most = args.max_iterations
+        config = IRLConfig(max_iterations=most, min_iterations=min(config.min_iterations, most))
     try:
         path, history, seconds = learn_to_library(
             args.demos,

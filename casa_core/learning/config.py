@@ -119,6 +119,11 @@ class IRLConfig:
             value, low = getattr(self, name), 0 if name == "min_iterations" else 1
             if not (isinstance(value, int) and not isinstance(value, bool) and value >= low):
                 raise ValueError(f"IRLConfig.{name} must be an integer >= {low}, got {value!r}")
+        if self.min_iterations > self.max_iterations:
+            raise ValueError(
+                f"IRLConfig.min_iterations ({self.min_iterations}) must be at most "
+                f"max_iterations ({self.max_iterations})"
+            )
         require_positive("IRLConfig", hidden=self.hidden, cost_scale=self.cost_scale)
         require_positive("IRLConfig", length_scale=self.length_scale, lr=self.lr)
         require_positive("IRLConfig", tol_gap=self.tol_gap, tol_end=self.tol_end)

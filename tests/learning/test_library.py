@@ -407,6 +407,10 @@ def test_irl_config_refuses_settings_out_of_range():
     # max_iterations=0 ran no iteration and failed on an empty history.
     for settings, message in (
         ({"max_iterations": 0}, "IRLConfig.max_iterations must be an integer >= 1, got 0"),
+        (
+            {"min_iterations": 20, "max_iterations": 10},
+            r"IRLConfig.min_iterations \(20\) must be at most max_iterations \(10\)",
+        ),
         ({"min_iterations": -1}, "IRLConfig.min_iterations must be an integer >= 0"),
         ({"hidden": 0}, "hidden of IRLConfig must be a positive number, got 0"),
         ({"length_scale": 0.0}, "length_scale of IRLConfig must be a positive number"),
