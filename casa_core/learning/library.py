@@ -54,6 +54,7 @@ from casa_core.io.atomic import atomic_write_text
 from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.learning import IRLConfig, NeuralIntent, cost_network, feature_names
 from casa_core.learning.maxent import kept_record, stop_reason
+from casa_core.learning.network import network_shape
 from casa_core.planning import PlannerConfig
 
 FORMAT = "casa-intent"
@@ -199,7 +200,7 @@ def save_intent(
             {"name": n, "position": p.tolist()}
             for n, p in zip(intent.object_names, intent.objects, strict=True)
         ],
-        "network": _network_spec(intent),
+        "network": network_shape(intent.network),
         "cost_scale": intent.cost_scale,
         "cost_offset": intent.cost_offset,
         "length_scale": intent.length_scale,
@@ -214,21 +215,6 @@ def save_intent(
     payload["checksum"] = hashlib.sha256(_canonical(payload)).hexdigest()
     text = json.dumps(payload, indent=1, sort_keys=True, allow_nan=False) + "\n"
     return atomic_write_text(path, text)
-
-
-def _network_spec(intent: NeuralIntent) -> dict:
-    """The network's shape as the file stores it, read from the network itself."""
-    import torch
-
-    first = intent.network[0]
-    slopes = {m.negative_slope for m in intent.network if isinstance(m, torch.nn.LeakyReLU)}
-    if not isinstance(first, torch.nn.Linear) or len(slopes) != 1:
-        raise ValueError("a learned intent's network starts with a Linear layer, one leaky slope")
-    return {
-        "inputs": first.in_features,
-        "hidden": first.out_features,
-        "negative_slope": slopes.pop(),
-    }
 
 
 def _require(path: Path, ok: bool, rule: str, message: str) -> None:

@@ -81,3 +81,18 @@ def network_output(network: torch.nn.Sequential, inputs: torch.Tensor) -> torch.
                 f"not {type(module).__name__}"
             )
     return x
+
+
+def network_shape(network: torch.nn.Module) -> dict:
+    """``inputs``, ``hidden`` (units of the first layer) and ``negative_slope`` of a
+    network of :func:`~casa_core.learning.features.cost_network`'s form, read from it."""
+    layers = list(network.children())
+    first = layers[0] if layers else None
+    slopes = {m.negative_slope for m in layers if isinstance(m, torch.nn.LeakyReLU)}
+    if not isinstance(first, torch.nn.Linear) or len(slopes) != 1:
+        raise ValueError("a learned cost's network starts with a Linear layer, one leaky slope")
+    return {
+        "inputs": first.in_features,
+        "hidden": first.out_features,
+        "negative_slope": slopes.pop(),
+    }

@@ -186,7 +186,7 @@ def run_trial(
     intents = list(intents)
     ticks_per_inference = inference_ticks(scene)
     until_done = scene.trial_length is None
-    if not until_done:
+    if scene.trial_length is not None:
         max_duration = scene.trial_length
     assistant = trial_assistant(scene, method, intents, inference, assistant_options)
     own_sim = sim is None
