@@ -185,7 +185,6 @@ def run_trial(
         intents = known_goal_intents(scene, **inference.goal_options())
     intents = list(intents)
     ticks_per_inference = inference_ticks(scene)
-    until_done = scene.trial_length is None
     if scene.trial_length is not None:
         max_duration = scene.trial_length
     assistant = trial_assistant(scene, method, intents, inference, assistant_options)
@@ -194,7 +193,7 @@ def run_trial(
         sim = ArmSimulation(scene)
     try:
         rows = _closed_loop(
-            sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick, until_done
+            sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick
         )
     finally:
         if own_sim:
@@ -278,10 +277,9 @@ def trial_meta(
     return meta
 
 
-def _closed_loop(
-    sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick, until_done
-):
+def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duration, on_tick):
     dt = scene.teleop.dt
+    until_done = scene.trial_length is None
     drive = scene_drive(sim, scene)
     state = drive.start()
     assistant.reset(state)
