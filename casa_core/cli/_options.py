@@ -20,9 +20,18 @@ def trial_options(command) -> None:
     ``--participant``, ``--out`` and ``--phase``."""
     from casa_core import vocabulary
 
-    command.add_argument("--task", required=True, choices=vocabulary.TASKS)
-    command.add_argument("--method", required=True, choices=vocabulary.METHODS)
-    command.add_argument("--participant", required=True, metavar="ID")
+    command.add_argument(
+        "--task", required=True, choices=vocabulary.TASKS, help="the task the trial records"
+    )
+    command.add_argument(
+        "--method",
+        required=True,
+        choices=vocabulary.METHODS,
+        help="the assistance method: NA (none), PBA or CASA",
+    )
+    command.add_argument(
+        "--participant", required=True, metavar="ID", help="participant id in the log, e.g. P07"
+    )
     command.add_argument("--out", required=True, metavar="DIR", help="folder of the log")
     command.add_argument(
         "--phase", choices=vocabulary.PHASES, help="log phase (default: the task's first)"

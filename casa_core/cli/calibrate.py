@@ -27,7 +27,7 @@ def register(commands) -> None:
         "operators drawn from the prior, fit the population's medians by neural posterior "
         "estimation (sbi), and write the population FILE (JSON, docs/calibration.md), "
         "FILE's stem + _predictive.csv (people's summaries beside the fitted model's, per "
-        "task and method, with 90%% intervals) and + _predictive.png. Set "
+        "task and method, with 90% intervals) and + _predictive.png. Set "
         "simulation.operator_population: FILE to simulate the study and the power analysis "
         "with it. Nothing is written until everything is computed.",
         **example(EXAMPLE),

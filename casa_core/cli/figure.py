@@ -28,7 +28,9 @@ def _add_figure(commands) -> None:
         "--stats", metavar="CSV", help="stats.csv (Friedman and Holm-corrected Wilcoxon marks)"
     )
     arbitration = figures.add_parser("arbitration", help="belief, confidence and alpha")
-    arbitration.add_argument("--arbitration", required=True, metavar="CSV")
+    arbitration.add_argument(
+        "--arbitration", required=True, metavar="CSV", help="the case study's arbitration.csv"
+    )
     case_study = figures.add_parser("case_study", help="confidence and alpha per task")
     case_study.add_argument("--steps", required=True, metavar="CSV", help="steps.csv")
     case_study.add_argument("--participant", help="whose runs (default: the first)")

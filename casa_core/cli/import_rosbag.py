@@ -23,10 +23,11 @@ def register_rosbag(formats) -> None:
     )
     rosbag.add_argument("bag", metavar="BAG", help="the rosbag2 folder")
     rosbag.add_argument("--out", required=True, metavar="DIR", help="the dataset folder")
-    rosbag.add_argument("--participant", metavar="ID")
-    rosbag.add_argument("--task", choices=vocabulary.TASKS)
-    rosbag.add_argument("--method", choices=vocabulary.METHODS)
-    rosbag.add_argument("--phase", choices=vocabulary.PHASES)
+    recorded = "(default: the recorded casa/trial topic's)"
+    rosbag.add_argument("--participant", metavar="ID", help=f"participant id {recorded}")
+    rosbag.add_argument("--task", choices=vocabulary.TASKS, help=f"the task {recorded}")
+    rosbag.add_argument("--method", choices=vocabulary.METHODS, help=f"the method {recorded}")
+    rosbag.add_argument("--phase", choices=vocabulary.PHASES, help=f"the phase {recorded}")
     rosbag.add_argument("--source", choices=vocabulary.SOURCES, help="default: human")
     for role, default in (
         ("joint-states", "joint_states"),

@@ -38,7 +38,7 @@ def register(commands) -> None:
     )
     command.add_argument("--participant", help="stored participant (default: from the logs)")
     command.add_argument(
-        "--max-iterations", type=positive_int, metavar="N", help="most IRL iterations (default 50)"
+        "--max-iterations", type=positive_int, metavar="N", help="most IRL iterations (default 30)"
     )
     command.set_defaults(func=_learn)
 

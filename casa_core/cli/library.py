@@ -34,7 +34,7 @@ def register(commands) -> None:
         "docs/data-contracts.md, Intent library.",
         **example("casa library list data/raw/simulated"),
     )
-    listing.add_argument("library", metavar="DIR")
+    listing.add_argument("library", metavar="DIR", help="the intent library's folder")
     listing.set_defaults(func=_library_list)
 
 

@@ -36,6 +36,10 @@ def register(commands) -> None:
     command = commands.add_parser(
         "power",
         help="simulated power of H1-H3: per replicate study, the table, the figure",
+        description="The steps of the power analysis. To run the whole analysis, run "
+        "`snakemake --cores all power` in the workflow's folder (docs/power.md): it simulates "
+        "the replicate studies of the config's power.sizes and power.replicates and runs "
+        "these steps on them; `casa progress power` says how far it has come.",
         **example(*(line for lines in _EXAMPLES.values() for line in lines)),
     )
     steps = command.add_subparsers(dest="step", metavar="STEP", required=True)
@@ -56,7 +60,13 @@ def register(commands) -> None:
     table = steps.add_parser(
         "table", help="power.csv from the replicates' detections", **example(*_EXAMPLES["table"])
     )
-    table.add_argument("--detections", required=True, nargs="+", metavar="CSV")
+    table.add_argument(
+        "--detections",
+        required=True,
+        nargs="+",
+        metavar="CSV",
+        help="the replicates' detections.csv files (casa power detect)",
+    )
     table.add_argument(
         "--population",
         default=CONFIG_POPULATION,

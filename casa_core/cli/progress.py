@@ -22,7 +22,11 @@ def register(commands) -> None:
         "read; exit 2 if that folder does not exist.",
         **example(*EXAMPLE),
     )
-    command.add_argument("target", choices=list(UNIT_WORDS))
+    command.add_argument(
+        "target",
+        choices=list(UNIT_WORDS),
+        help="the workflow's target whose units to count: " + ", ".join(UNIT_WORDS),
+    )
     command.add_argument(
         "--config",
         required=True,

@@ -8,6 +8,7 @@ from pathlib import Path
 from casa_core import vocabulary
 from casa_core.cli._errors import fail
 from casa_core.cli._options import dataset_scene, example, nonnegative_float, positive_float
+from casa_core.defaults import EPSILON
 from casa_core.io.contract import NO_LOGGED_INFERENCE
 
 #: The columns of ``replay.csv``, one row per trial.
@@ -29,6 +30,10 @@ SUMMARY_COLUMNS = [
     "status",
     "reason",
 ]
+
+
+#: The options that replay a trial under settings other than its own: a counterfactual.
+COUNTERFACTUAL_OPTIONS = ("preset", "evidence", "arbitration", "lam", "epsilon", "intents")
 
 
 def register(commands) -> None:
@@ -79,7 +84,7 @@ def register(commands) -> None:
     )
     command.add_argument("--lam", type=nonnegative_float, help="rate of the prior on beta")
     command.add_argument(
-        "--epsilon", type=positive_float, help="misspecification threshold (default 1.0)"
+        "--epsilon", type=positive_float, help=f"misspecification threshold (default {EPSILON:g})"
     )
     command.add_argument(
         "--intents",
@@ -108,7 +113,6 @@ def register(commands) -> None:
 
 def _replay(args) -> int:
     from casa_core.assist.assistant import ARBITRATIONS
-    from casa_core.defaults import EPSILON
     from casa_core.scene import load_scene
 
     if args.arbitration is not None and args.arbitration not in ARBITRATIONS:
@@ -152,7 +156,8 @@ def _replay(args) -> int:
             scenes[root] = load_scene(dataset_scene(root, None) if trial["folder"] else None)
         scene = given or scenes[root]
         rows.append(_replay_one(trial, scene, args, epsilon, out, figures))
-    return _summarise(rows, out)
+    changed = [f"--{name}" for name in COUNTERFACTUAL_OPTIONS if getattr(args, name) is not None]
+    return _summarise(rows, out, changed)
 
 
 def _collect(paths) -> tuple[list[dict], list, list[str]]:
@@ -255,7 +260,7 @@ def _learned(trial: dict, intents: str | None, participant: str) -> list[Path]:
     return kept_intent_files(trial["file"], trial["root"])
 
 
-def _summarise(rows: list[dict], out: Path) -> int:
+def _summarise(rows: list[dict], out: Path, changed: list[str]) -> int:
     import pandas as pd
 
     from casa_core.io import write_csv
@@ -268,10 +273,14 @@ def _summarise(rows: list[dict], out: Path) -> int:
         if row["status"] != "skipped" or not str(row["reason"]).startswith("method "):
             print(f"casa replay: {row['trial']} {row['status']}: {row['reason']}", file=sys.stderr)
     largest = table[["max_diff_beta", "max_diff_belief", "max_diff_alpha"]].max()
+    if changed:
+        expected = f"expected: {' '.join(changed)} changed the settings the trials ran with"
+    else:
+        expected = "0 where the trials' own settings are reproduced"
     print(
         f"casa replay: {int(counts.get('replayed', 0))} trial(s) replayed, "
         f"{int(counts.get('skipped', 0))} skipped, {int(counts.get('invalid', 0))} invalid "
-        f"-> {out}; largest difference from the logs: beta {largest.iloc[0]:.3g}, "
+        f"-> {out}; largest difference from the logs ({expected}): beta {largest.iloc[0]:.3g}, "
         f"belief {largest.iloc[1]:.3g}, alpha {largest.iloc[2]:.3g}"
     )
     return 0

@@ -131,16 +131,16 @@ def register(commands) -> None:
         help="a Markdown file (e.g. stats.md) as HTML",
         **_example("markdown"),
     )
-    markdown.add_argument("markdown", metavar="MD")
-    markdown.add_argument("--out", required=True, metavar="HTML")
+    markdown.add_argument("markdown", metavar="MD", help="the Markdown page (e.g. stats.md)")
+    markdown.add_argument("--out", required=True, metavar="HTML", help="the HTML page to write")
     markdown.set_defaults(func=_markdown)
     table = pages.add_parser(
         "table",
         help="a processed table as a browsable HTML table",
         **_example("table"),
     )
-    table.add_argument("table", metavar="CSV")
-    table.add_argument("--out", required=True, metavar="HTML")
+    table.add_argument("table", metavar="CSV", help="the processed table (e.g. trials.csv)")
+    table.add_argument("--out", required=True, metavar="HTML", help="the HTML page to write")
     table.add_argument("--title", help="the heading (default: the file's name)")
     table.set_defaults(func=_table)
     # The claims under each modelling variant.

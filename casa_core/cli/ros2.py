@@ -64,7 +64,12 @@ def register(commands) -> None:
     from casa_core.assist.presets import DEFAULT_PRESET
 
     trial_options(assist)
-    assist.add_argument("--preset", choices=vocabulary.PRESET_NAMES, default=DEFAULT_PRESET)
+    assist.add_argument(
+        "--preset",
+        choices=vocabulary.PRESET_NAMES,
+        default=DEFAULT_PRESET,
+        help="the inference settings (docs/departures.md) (default %(default)s)",
+    )
     assist.add_argument(
         "--intent",
         action="append",

@@ -38,7 +38,13 @@ def register(commands) -> None:
         help="how the keys move the arm (docs/departures.md): the tool orientation held, or "
         "the original implementation's position-only IK of link 7 (default: the scene's)",
     )
-    command.add_argument("--max-duration", type=positive_float, default=60.0, metavar="SECONDS")
+    command.add_argument(
+        "--max-duration",
+        type=positive_float,
+        default=60.0,
+        metavar="SECONDS",
+        help="end the trial after this long, done or not (default %(default)g)",
+    )
     command.add_argument(
         "--intent",
         action="append",

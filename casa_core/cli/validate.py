@@ -15,7 +15,9 @@ def register(commands) -> None:
         "validate",
         help="check trial logs and surveys against the casa-trial/1 contract",
         description="Check files and folders (recursively) against casa-trial/1; print every "
-        "problem with file, row or key, and rule; exit 1 if any (0 with --allow-invalid).",
+        "problem with file, row or key, and rule on standard output (so `> problems.txt` "
+        "keeps them), then the counts on standard error; exit 1 if any (0 with "
+        "--allow-invalid).",
         **example("casa validate data/raw/mine --report data/processed/mine/validation.csv"),
     )
     command.add_argument("paths", nargs="+", metavar="PATH", help="a log file or a folder")
@@ -43,14 +45,15 @@ def _validate(args) -> int:
         checks = check_paths(args.paths)
     problems = [problem for check in checks for problem in check.problems]
     for problem in problems:
-        print(problem, file=sys.stderr)
+        print(problem)
     # A path that does not exist, or a folder without logs, is a problem but not a file.
     files = [check for check in checks if check.kind not in ("missing", "folder")]
     verdict = "excluded" if args.allow_invalid else "invalid"
     bad_files = sum(not check.ok for check in files)
     for check in checks:
         if check.kind == "missing":
-            print(f"casa validate: {check.file} does not exist", file=sys.stderr)
+            print(f"casa validate: {check.file} does not exist")
+    sys.stdout.flush()  # the problems before the counts, where both reach one log
     errors = [problem for problem in problems if problem.is_error]
     warned = f" ({len(problems) - len(errors)} warning(s))" if len(errors) < len(problems) else ""
     print(

@@ -105,13 +105,17 @@ def test_cli_on_a_dataset_folder(dataset, tmp_path, capsys):
         assert int(rows.loc[method, "steps"]) == (len(frame) - 1) // PER_STEP
         png = out / "p01" / f"known_goal_{method}.replay.png"
         assert png.read_bytes().startswith(b"\x89PNG")
-    assert "2 trial(s) replayed, 1 skipped" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "2 trial(s) replayed, 1 skipped" in said
+    assert "(0 where the trials' own settings are reproduced)" in said
 
 
-def test_a_named_file_is_replayed_whatever_its_method(dataset, tmp_path):
+def test_a_named_file_is_replayed_whatever_its_method(dataset, tmp_path, capsys):
     out = tmp_path / "out"
     stem = dataset / "p01" / "known_goal_NA"  # a stem names its trial
     assert main(["replay", str(stem), "--arbitration", "confidence", "--out", str(out)]) == 0
+    # A counterfactual's differences from the log are its effect, and the summary says so.
+    assert "(expected: --arbitration changed the settings" in capsys.readouterr().out
     summary = pd.read_csv(out / "replay.csv", keep_default_na=False)
     assert summary["status"].tolist() == ["replayed"]
     assert summary["arbitration"].tolist() == ["confidence"]

@@ -31,20 +31,21 @@ def test_bad_files_are_all_listed_and_exit_1(tmp_path, capsys):
     lone = tmp_path / "ds" / "p02" / "lone.json"
     lone.write_text("{}")
     assert main(["validate", str(tmp_path / "ds"), str(tmp_path / "missing")]) == 1
-    err = capsys.readouterr().err
-    assert f"{meta_path}: key 'source': [enum] is 'lab'" in err
-    assert f"{tmp_path / 'ds' / 'p02' / 'lone.csv'}: [pair]" in err
-    assert f"{lone}: key 'participant': [required-key] missing" in err
-    assert f"{tmp_path / 'missing'}: [exists]" in err
-    assert f"casa validate: {tmp_path / 'missing'} does not exist" in err
+    # The problems on standard output (`> problems.txt` keeps them), the counts on error.
+    out, err = capsys.readouterr()
+    assert f"{meta_path}: key 'source': [enum] is 'lab'" in out
+    assert f"{tmp_path / 'ds' / 'p02' / 'lone.csv'}: [pair]" in out
+    assert f"{lone}: key 'participant': [required-key] missing" in out
+    assert f"{tmp_path / 'missing'}: [exists]" in out
+    assert f"casa validate: {tmp_path / 'missing'} does not exist" in out
     # 2 x 11 trials and the lone one, 2 of them bad; the missing path is a problem, not a file.
-    assert "23 trial(s) checked, 2 invalid," in err
+    assert err == "casa validate: 23 trial(s) checked, 2 invalid, 9 problem(s)\n"
 
 
 def test_a_path_that_does_not_exist_is_named_and_not_counted_as_a_file(tmp_path, capsys):
     assert main(["validate", str(tmp_path / "nope")]) == 1
-    err = capsys.readouterr().err
-    assert f"casa validate: {tmp_path / 'nope'} does not exist" in err
+    out, err = capsys.readouterr()
+    assert f"casa validate: {tmp_path / 'nope'} does not exist" in out
     assert "0 trial(s) checked, 0 invalid, 1 problem(s)" in err
 
 
@@ -130,8 +131,8 @@ def test_warnings_are_printed_and_exit_0(tmp_path, capsys):
     csv_path.write_text(table.to_csv(index=False))
     report = tmp_path / "validation.csv"
     assert main(["validate", str(tmp_path / "ds"), "--report", str(report)]) == 0
-    err = capsys.readouterr().err
-    assert f"{csv_path}: column 't', line {len(table) // 2 + 2}: warning [tick-irregular]" in err
+    out, err = capsys.readouterr()
+    assert f"{csv_path}: column 't', line {len(table) // 2 + 2}: warning [tick-irregular]" in out
     assert "1 trial(s) checked, 0 invalid, 1 problem(s) (1 warning(s))" in err
     rows = read_table(report)
     assert rows[["status", "rule"]].values.tolist() == [["warning", "tick-irregular"]]
@@ -147,4 +148,4 @@ def test_latin1_files_are_a_message_not_a_traceback(tmp_path, capsys):
     csv_path = stem.with_name(stem.name + ".csv")
     csv_path.write_bytes(csv_path.read_bytes() + "0.0,0,0,0,0,é\n".encode("latin-1"))
     assert main(["validate", str(tmp_path / "ds")]) == 1
-    assert f"{csv_path}: line " in capsys.readouterr().err
+    assert f"{csv_path}: line " in capsys.readouterr().out

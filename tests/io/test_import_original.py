@@ -293,6 +293,7 @@ def test_rerun_refuses_to_overwrite_unless_forced(sessions, tmp_path, capsys):
 
 DAMAGED = [
     ("truncated", "task1c_data.npz", "", "npz"),
+    ("not an archive", "task1c_data.npz", "", "npz"),
     ("no curr_pos", "task1c_data.npz", "key 'curr_pos'", "required-key"),
     ("wrong shape", "task1c_data.npz", "key 'curr_pos'", "shape"),
     ("decreasing time", "task1c_data.npz", "key 'cmdpos_time'", "increasing"),
@@ -309,6 +310,8 @@ def test_damaged_files_stop_the_import_naming_file_and_key(
     if damage == "truncated":
         data = (sessions / "task1b_data.npz").read_bytes()
         path.write_bytes(data[: len(data) // 2])
+    elif damage == "not an archive":
+        path.write_text("time,x\n0,1\n")
     elif damage == "no curr_pos":
         write_session(sessions, name, curr_pos=None)
     elif damage == "wrong shape":
@@ -325,6 +328,7 @@ def test_damaged_files_stop_the_import_naming_file_and_key(
     err = capsys.readouterr().err
     assert f"{path}: {where}: [{rule}]".replace(": : ", ": ") in err
     assert "Traceback" not in err
+    assert "pickle" not in err  # numpy's hint to load a file unsafely is not for this user
     assert not out.exists()  # nothing half-written
     assert digest(sessions) == before
     # --skip-bad lists the bad file and converts the others.
@@ -362,7 +366,7 @@ def test_validate_names_the_key_of_a_bad_dataset_scene(sessions, tmp_path, capsy
     scene.write_text(scene.read_text().replace("  red:", "  blue:"))
     capsys.readouterr()
     assert main(["validate", str(out)]) == 1
-    assert f"{scene}: key 'goals.red': [scene] missing" in capsys.readouterr().err
+    assert f"{scene}: key 'goals.red': [scene] missing" in capsys.readouterr().out
 
 
 def test_the_scene_holds_link7_and_the_tool_points_of_the_reference_angles():

@@ -31,6 +31,9 @@ def load_arrays(path: Path) -> dict:
     planned trajectories so, which the import does not use.
     """
     try:
+        # np.load takes any other file for a pickle and says how to load it unsafely.
+        if not zipfile.is_zipfile(path):
+            raise ValueError("the file is not a zip archive")
         with np.load(path, allow_pickle=False) as archive:
             return {key: _array(archive, key) for key in archive.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as error:
