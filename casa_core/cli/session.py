@@ -35,6 +35,12 @@ def register(commands) -> None:
         "epsilon, seed) and inference blocks are used",
     )
     scene_option(command)
+    command.add_argument(
+        "--quiet",
+        action="store_true",
+        help="keep the blinding on the console too: the method order and each trial's method "
+        "go to the session log (OUT/<participant>/.session/session.log) only",
+    )
     command.set_defaults(func=_session)
 
 
@@ -62,6 +68,7 @@ def _session(args) -> int:
             Path(args.out),
             settings=SessionSettings.from_config(config),
             scene_source=scene_path,
+            quiet=args.quiet,
         )
     except (FileExistsError, LogError, RuntimeError, ValueError) as error:
         print(f"casa session: {error}", file=sys.stderr)

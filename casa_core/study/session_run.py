@@ -41,15 +41,18 @@ COMPLETE, STOPPED = "complete", "stopped"
 
 
 class SessionLog:
-    """Timestamped lines on the console and in the session log (rewritten atomically)."""
+    """Timestamped lines in the session log (rewritten atomically), echoed on the console
+    unless ``echo`` is false: the log names the methods, which a participant who can see
+    the console must not read."""
 
-    def __init__(self, path: Path):
-        self.path = path
+    def __init__(self, path: Path, *, echo: bool = True):
+        self.path, self.echo = path, echo
         self.text = path.read_text(encoding="utf-8") if path.is_file() else ""
 
     def __call__(self, line: str) -> None:
         stamped = f"{datetime.now(UTC).isoformat(timespec='seconds')} {line}"
-        print(stamped, flush=True)
+        if self.echo:
+            print(stamped, flush=True)
         self.text += stamped + "\n"
         atomic_write_text(self.path, self.text)
 
@@ -78,6 +81,7 @@ def run_session(
     settings: SessionSettings,
     scene_source: Path,
     window_factory=SessionWindow,
+    quiet: bool = False,
 ) -> str:
     """Run (or resume) one participant's session; :data:`COMPLETE` or :data:`STOPPED`.
 
@@ -92,6 +96,9 @@ def run_session(
     settings : SessionSettings
     window_factory : callable
         ``window_factory(scene, notify=...)`` opens the window.
+    quiet : bool
+        Write the session log's lines (the method order, each trial's method) to the log
+        only, not to the console.
 
     Raises
     ------
@@ -114,7 +121,9 @@ def run_session(
     if problems:
         raise ValueError("cannot log this participant: " + "; ".join(map(str, problems)))
     check_dataset_scene(out, scene, scene_source)
-    log = SessionLog(record.state_folder / "session.log")
+    log = SessionLog(record.state_folder / "session.log", echo=not quiet)
+    if quiet:
+        print(f"casa session: the steps and the method order go to {log.path} only", flush=True)
     log(f"session of participant {participant} in {record.folder.resolve()}")
     log(method_order_line(participant))
     _remove_halves(record, log)

@@ -267,6 +267,24 @@ def test_stopping_from_the_pause_screen_keeps_what_was_recorded_and_resumes_ther
     )
 
 
+def test_quiet_keeps_the_methods_off_the_console_and_in_the_session_log(tmp_path, capsys):
+    from casa_core.scene import DEFAULT_SCENE
+    from casa_core.study.session_run import run_session
+
+    def make(scene, *, notify=None):
+        return FakeWindow(scene, script=["start", "pause", "abort"])
+
+    options = {"settings": settings(), "scene_source": DEFAULT_SCENE, "window_factory": make}
+    methods = re.compile(r"\b(NA|PBA|CASA)\b")
+    run_session(load_scene(), "P05", tmp_path / "loud", **options)
+    assert methods.search(capsys.readouterr().out)  # without it the console names them
+    run_session(load_scene(), "P05", tmp_path / "quiet", quiet=True, **options)
+    console = capsys.readouterr().out
+    assert "session.log only" in console and not methods.search(console)
+    log = tmp_path / "quiet" / "P05" / SESSION_FOLDER / "session.log"
+    assert "method order: participant P05" in log.read_text()
+
+
 def test_a_dataset_of_another_layout_is_refused_before_a_window_opens(tmp_path, capsys):
     from casa_core.cli import main
     from casa_core.scene import DEFAULT_SCENE
