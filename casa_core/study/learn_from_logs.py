@@ -7,6 +7,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from casa_core.io import find_files, load_meta, read_trial
+from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.learning.config import IRLConfig
 from casa_core.learning.library import intent_path, save_intent
 from casa_core.learning.maxent import MaxEntIRL
@@ -46,7 +47,12 @@ def read_demonstrations(
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"{folder}: demonstrations folder not found")
-    stems = [p.with_suffix("") for p in find_files(folder) if p.suffix == ".json"]
+    # A dataset keeps its learned intents beside the logs (*.intent.json): not trials.
+    stems = [
+        p.with_suffix("")
+        for p in find_files(folder)
+        if p.suffix == ".json" and not p.name.endswith(INTENT_SUFFIX)
+    ]
     demos, metas, skipped, logs = [], [], set(), logs or {}
     for stem in stems:
         json_path = stem.with_suffix(".json")

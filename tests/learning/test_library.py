@@ -261,6 +261,23 @@ def test_cli_learn_then_list(tmp_path):
     assert "broken.intent.json" in listed.stderr and "Traceback" not in listed.stderr
 
 
+def test_cli_learn_reads_a_participant_folder_whose_kept_intents_are_not_logs(tmp_path):
+    # A dataset keeps each participant's learned intents below its folder, as the
+    # workflow does (intents/<participant>/*.intent.json); learning again from that
+    # folder reads the logs and passes over the intents, as casa validate does.
+    participant = tmp_path / "p07"
+    write_demo_logs(participant)
+    kept = participant / "intents" / "p07"
+    for name in ("first", "again"):
+        done = run_casa(
+            "learn", "--demos", str(participant), "--name", name, "--library", str(kept),
+            "--max-iterations", "1",
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr
+    again = library.load_intent(kept / "again.intent.json")
+    assert len(again.metadata["demo_hashes"]) == 2  # the two logs, not the first intent
+
+
 def test_cli_learn_reports_missing_demos_without_traceback(tmp_path):
     done = run_casa(
         "learn", "--demos", str(tmp_path / "none"), "--name", "x", "--library", str(tmp_path)
