@@ -301,3 +301,20 @@ def test_in_a_trial_of_fixed_length_the_operators_wait_once_arrived():
                 )
     assert arrived >= 9, arrived
     assert with_keys <= 0.05 * after, (with_keys, after)
+
+
+@pytest.mark.parametrize("operator", ["lookahead", "predictive"])
+def test_a_reference_that_never_moves_is_a_point_the_operator_steers_to(operator):
+    # A reference path of one repeated pose (path length 0) is a target, not a direction:
+    # the operator presses toward it (here x+, 10 cm) and lets go once there, with no NaN.
+    reference = np.zeros((20, 5))
+    reference[:, 0] = 0.05 * np.arange(20)
+    reference[:, 1:] = [0.5, 0.0, 0.2, 0.0]
+    source = make_participant(EXPERT, reference, rng=np.random.default_rng(0), operator=operator)
+    start = np.array([0.4, 0.0, 0.2, 0.0])
+    held = [source.keys(0.05 * i, start) for i in range(40)]
+    assert any("x+" in keys for keys in held) and not source.done
+    there = reference[0, 1:]
+    for i in range(40, 200):
+        source.keys(0.05 * i, there)
+    assert source.done
