@@ -224,6 +224,9 @@ class Assistant:
     def _start_trial(self, state: np.ndarray | None) -> None:
         """The trial's state at ``state``, or before any trial (``state`` None)."""
         n = len(self.intents)
+        if state is not None:
+            for intent in self.intents:  # intents shared by several trials start afresh
+                intent.start_trial()
         self._steps = 0
         self._evidence = 0  # inference steps that counted as evidence
         self._user_input = False  # any nonzero user action since the last step

@@ -72,6 +72,11 @@ class Intent(ABC):
     def distance(self, state: np.ndarray) -> float:
         """Distance (m) from the end effector to where the intent ends; PBA arbitrates with it."""
 
+    def start_trial(self) -> None:  # noqa: B027 (a hook: a closed form has nothing to drop)
+        """Forget what earlier trials left behind, so that a trial's numbers do not depend
+        on the trials before it. A closed-form intent keeps nothing; a planned one
+        (:class:`casa_core.planning.PlannedIntent`) drops its cached plans and warm start."""
+
 
 class GoalIntent(Intent):
     """Reaching a goal position with the end effector, at most ``speed`` m/s.

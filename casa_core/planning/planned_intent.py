@@ -65,6 +65,7 @@ class PlannedIntent(Intent):
         self._cache: OrderedDict[tuple, Plan] = OrderedDict()
         self._cache_size = cache_size
         self._latest: tuple[int, np.ndarray] | None = None  # (steps left, states) of last plan
+        self._seeded: dict[tuple, Plan] = {}  # plans given at construction: kept across trials
         self.guides = [np.asarray(g, dtype=float).reshape(-1, 4) for g in guides]
 
     @abstractmethod
@@ -142,9 +143,16 @@ class PlannedIntent(Intent):
         """
         state = np.asarray(state, dtype=float).reshape(4)
         n = steps_left(time_left, self.dt)
+        self._seeded[(state.tobytes(), n)] = plan
         self._remember((state.tobytes(), n), plan)
         if n > 0:
             self._latest = (n, plan.states[0])
+
+    def start_trial(self) -> None:
+        """Drop the plans and the warm start of earlier trials (a seeded plan stays): each
+        trial's plans then depend on that trial alone, whatever ran before it."""
+        self._cache = OrderedDict(self._seeded)
+        self._latest = None
 
     def _remember(self, key: tuple, plan: Plan) -> None:
         self._cache[key] = plan

@@ -297,3 +297,20 @@ def test_the_robots_own_motion_is_not_evidence_under_commanded():
     np.testing.assert_allclose(after_switch, after_switch[0], atol=1e-3)
     grown = executed[15].suboptimality["purple"] - executed[5].suboptimality["purple"]
     assert grown > 1.0
+
+
+def test_each_trial_starts_its_intents_afresh():
+    # Intents are shared by the trials after learning; the assistant's reset starts each
+    # of them (a planned intent then drops the plans of the trial before).
+    class Counted(GoalIntent):
+        starts = 0
+
+        def start_trial(self):
+            Counted.starts += 1
+
+    intents = [Counted("a", GOAL), Counted("b", -GOAL)]
+    assistant = Assistant(intents)
+    assert Counted.starts == 0  # constructing is not a trial
+    assistant.reset(START)
+    assistant.reset(START)
+    assert Counted.starts == 4

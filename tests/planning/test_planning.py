@@ -178,3 +178,35 @@ def test_costs_to_go_of_several_states_match_one_by_one_plans():
     np.testing.assert_allclose(costs, expected, rtol=1e-3)
     assert len(batched._cache) == 3  # both new plans kept: the next ask is free
     np.testing.assert_array_equal(batched.costs_to_go([a, b], 14.5), costs)
+
+
+def test_a_trial_plans_the_same_whatever_trial_ran_before_it():
+    # Two trials share one intent, as the trials after learning do. Trial B's plan at a
+    # state trial A also visited must be the plan B makes on its own: a cached plan or a
+    # warm start from A would make B's numbers depend on the order of the trials.
+    config = PlannerConfig(warm_iterations=5)  # few iterations: the warm start shows
+    visited = START + [0.05, 0.05, -0.05, 0.0]
+
+    def trial_b(intent):
+        intent.start_trial()
+        intent.plan(START + [0.0, 0.1, 0.0, 0.0], 15.0)
+        return intent.plan(visited, 14.5)
+
+    alone = trial_b(GoalCost(RED, config))
+    shared = GoalCost(RED, config)
+    shared.start_trial()
+    shared.plan(START, 15.0)  # trial A
+    shared.plan(visited, 14.5)
+    after_a = trial_b(shared)
+    np.testing.assert_array_equal(after_a.states, alone.states)
+    np.testing.assert_array_equal(after_a.costs, alone.costs)
+    # The shared intent's cache does serve a trial's own repeated plans.
+    assert shared.plan(visited, 14.5) is after_a
+
+
+def test_a_seeded_plan_survives_the_start_of_a_trial():
+    intent = GoalCost(RED)
+    seeded = optimize(intent.state_cost, START, steps_left(15.0, intent.dt))
+    intent.seed_plan(START, 15.0, seeded)
+    intent.start_trial()
+    assert intent.plan(START, 15.0) is seeded
