@@ -367,12 +367,35 @@ class Assistant:
         """
         self._require_reset("act")
         user_action = np.asarray(user_action, dtype=float)
-        if record and user_action.any():
-            self._user_input = True
         if self.latest is None:
+            if record:
+                self.record(user_action)
             return user_action.copy()
         robot = self.robot_action(state, elapsed_in_step)
         alpha = self.latest.alpha if alpha is None else float(alpha)
-        if record and self.evidence == "commanded" and alpha < 1.0:
-            self._robot_motion += (1.0 - alpha) * (robot - user_action) * self.tick
+        if record:
+            self.record(user_action, robot, alpha=alpha)
         return blend(alpha, user_action, robot)
+
+    @property
+    def alpha(self) -> float:
+        """The user's authority this tick: the latest inference's alpha, 1 before the first."""
+        return 1.0 if self.latest is None else self.latest.alpha
+
+    def record(self, user_action, robot_action=None, *, alpha: float = 1.0) -> None:
+        """Keep, for the next inference step, what one tick applied: the user's action T(a)
+        and, where the robot had a share (``alpha < 1``), the robot's action, each the
+        state velocity ``[vx, vy, vz, vrot]`` of the command the arm was driven by.
+
+        :meth:`act` records its own blend; a caller that blends in another space (joint
+        velocities, :class:`casa_core.study.drive.OriginalDrive`) records the state
+        velocities of the commands it blended, so that the robot's share removed from the
+        evidence is the one the arm was moved by.
+        """
+        self._require_reset("record")
+        user_action = np.asarray(user_action, dtype=float)
+        if user_action.any():
+            self._user_input = True
+        if robot_action is not None and self.evidence == "commanded" and alpha < 1.0:
+            robot = np.asarray(robot_action, dtype=float)
+            self._robot_motion += (1.0 - alpha) * (robot - user_action) * self.tick

@@ -85,17 +85,21 @@ class OriginalDrive:
         The user's joint command is recorded by the assistant as its velocity at the
         scene's point (the evidence of inference). While the user has full authority the
         arm gets that command alone, exactly the original's; otherwise the blend with the
-        robot's u* in joint space, after which the keys' target is put back on link 7, so
-        that the next key moves on from where the assisted arm is instead of pulling it
-        back.
+        robot's u* in joint space, whose share the assistant records as the velocity of
+        the robot's joint command at the point, after which the keys' target is put back
+        on link 7, so that the next key moves on from where the assisted arm is instead of
+        pulling it back.
         """
         user_joints = self.teleop.joint_command(held)
         user_action = self.teleop.state_velocity(user_joints)
-        assistant.act(state, user_action, elapsed_in_step=elapsed_in_step)
-        alpha = 1.0 if assistant.latest is None else assistant.latest.alpha
+        alpha = assistant.alpha
         if alpha >= 1.0:
+            assistant.record(user_action)
             return self._with_wrist_turn(self.sim.step_joints(user_joints))
         robot_joints = self.teleop.follow(assistant.robot_action(state, elapsed_in_step))
+        # The robot's share as the arm gets it: its joint command's velocity at the point.
+        robot_action = self.teleop.state_velocity(robot_joints)
+        assistant.record(user_action, robot_action, alpha=alpha)
         state = self.sim.step_joints(blend(alpha, user_joints, robot_joints))
         self.teleop.reset()
         return self._with_wrist_turn(state)

@@ -199,6 +199,39 @@ def test_assisted_ticks_send_the_blend_of_the_users_and_the_robots_joint_velocit
     assert task_success(executed(result.frame), intended_trajectory("known_goal", ORIGINAL_SCENE))
 
 
+def test_the_evidence_removes_the_robots_share_the_arm_was_moved_by(monkeypatch):
+    # The arm is driven by the joint-space blend, so the robot's share the assistant takes
+    # out of the evidence is the velocity at the point of the robot's joint command that
+    # was blended (through the same Jacobian as the user's), not u* itself, which the
+    # position-only IK follows only to about a tenth.
+    from casa_core.assist.assistant import Assistant
+    from casa_core.robot.original_teleop import OriginalTeleoperation
+
+    followed, checked, gaps = [], [], []
+    record, follow = Assistant.record, OriginalTeleoperation.follow
+
+    def spy_follow(teleop, velocity):
+        joints = follow(teleop, velocity)
+        followed.append((teleop, np.array(velocity), joints))
+        return joints
+
+    def spy_record(assistant, user_action, robot_action=None, *, alpha=1.0):
+        if alpha < 1.0:
+            teleop, u_star, joints = followed[-1]  # the arm has not moved since
+            expected = teleop.state_velocity(joints)
+            np.testing.assert_array_equal(robot_action, expected)
+            checked.append(alpha)
+            gaps.append(np.linalg.norm(expected[:3] - u_star[:3]))
+        return record(assistant, user_action, robot_action, alpha=alpha)
+
+    monkeypatch.setattr(OriginalTeleoperation, "follow", spy_follow)
+    monkeypatch.setattr(Assistant, "record", spy_record)
+    goal = ORIGINAL_SCENE.goal("green")
+    run_trial(ORIGINAL_SCENE, "known_goal", "CASA", TowardGoal(goal), participant="p")
+    assert len(checked) > 20, "CASA never assisted toward green"
+    assert max(gaps) > 1e-4  # the share the arm got is not u*: recording u* was wrong
+
+
 def test_a_scene_with_a_bad_mode_or_start_angles_is_refused_naming_the_key():
     import yaml
 
