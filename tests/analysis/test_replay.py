@@ -103,8 +103,9 @@ def test_cli_on_a_dataset_folder(dataset, tmp_path, capsys):
         _, frame = trial(dataset, method)
         assert len(table) == (len(frame) - 1) // PER_STEP * 2  # steps x (green, purple)
         assert int(rows.loc[method, "steps"]) == (len(frame) - 1) // PER_STEP
-        png = out / "p01" / f"known_goal_{method}.replay.png"
-        assert png.read_bytes().startswith(b"\x89PNG")
+        for figure in ("replay", "path"):
+            png = out / "p01" / f"known_goal_{method}.{figure}.png"
+            assert png.read_bytes().startswith(b"\x89PNG")
     assert "2 trial(s) replayed, 1 skipped" in capsys.readouterr().out
 
 
