@@ -9,9 +9,16 @@ from pathlib import Path
 import numpy as np
 from matplotlib.image import imread
 
+import pandas as pd
+
 from casa_core import figures
+from casa_core.assist.tasks import intended_trajectory
+from casa_core.cli._options import dataset_scene
+from casa_core.figures.path import COLUMNS as PATH_COLUMNS
+from casa_core.figures.path import path_figure
 from casa_core.figures.replay import replay_figure
-from casa_core.io import read_table
+from casa_core.io import read_table, read_trial
+from casa_core.scene import load_scene
 
 PROCESSED, FIGS = Path("data/processed"), Path("figures")
 problems = []
@@ -100,10 +107,19 @@ if not replayed:
 for _, row in replays[replays["status"] != "replayed"].iterrows():
     if row["method"] != "NA":
         problems.append(f"simulated/replay: {row['trial']} {row['status']}: {row['reason']}")
+# Beside each replay figure, the trial's path over its task's intended path.
 for trial in replayed:
-    check_file(FIGS / "simulated" / "replay" / f"{trial}.replay.png")
+    for figure in ("replay", "path"):
+        check_file(FIGS / "simulated" / "replay" / f"{trial}.{figure}.png")
 if replayed:
     first = read(simulated / "replay" / f"{replayed[0]}.replay.csv")
-    check_panels(f"replay {replayed[0]}", replay_figure(first), 3)
+    meta, log = read_trial(Path("data/raw/simulated") / replayed[0])
+    replay = replay_figure(first, logged=log)
+    check_panels(f"replay {replayed[0]}", replay, 3)
+    if len(replay.axes[2].lines) != 2:
+        problems.append(f"replay {replayed[0]}: no logged alpha beside the replayed one")
+    scene = load_scene(dataset_scene(Path("data/raw/simulated"), None))
+    intended = pd.DataFrame(intended_trajectory(meta["task"], scene), columns=PATH_COLUMNS)
+    check_panels(f"path {replayed[0]}", path_figure(log, intended), 4)
 
 finish("all figures present and complete")

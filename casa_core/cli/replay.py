@@ -42,9 +42,11 @@ def register(commands) -> None:
         "replay",
         help="redo the inference of recorded trials offline, with their own or other settings",
         description="Replay the inference over each trial's logged states and keys; write "
-        "OUT/<stem>.replay.csv, FIGURES/<stem>.replay.png (stems mirror the trial's path "
-        "below the folder given) and OUT/replay.csv (one row per trial, with the largest "
-        "difference from the log's beta/belief/alpha). Default settings: each trial's own. "
+        "OUT/<stem>.replay.csv, FIGURES/<stem>.replay.png (the replayed alpha over the "
+        "logged one), FIGURES/<stem>.path.png (the logged path over the task's intended "
+        "path; stems mirror the trial's path below the folder given) and OUT/replay.csv "
+        "(one row per trial, with the largest difference from the log's "
+        "beta/belief/alpha). Default settings: each trial's own. "
         "Trials found in folders are replayed when their method is one of --methods; a file "
         "named is always replayed. Exit 1 if a log is invalid, 2 on bad arguments. "
         "See docs/replay.md.",
@@ -188,8 +190,6 @@ def _collect(paths) -> tuple[list[dict], list, list[str]]:
 def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
     from casa_core.analysis.replay import replay_differences, replay_trial
     from casa_core.analysis.replay_settings import replay_path, trial_point, trial_settings
-    from casa_core.figures.replay import replay_figure
-    from casa_core.figures.style import save_figure
     from casa_core.io import write_csv
     from casa_core.io.contract import CONDITION_KEYS
 
@@ -237,8 +237,7 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
         f"({meta['task']}, {meta['phase']}) replayed with preset {chosen.name}, evidence "
         f"{chosen.evidence}, point {point}, arbitration {arbitration}"
     )
-    fig = replay_figure(replayed, epsilon=epsilon, title=title)
-    save_figure(fig, figures / stem.parent / f"{stem.name}.replay", formats=("png",))
+    _figures(trial, replayed, scene, epsilon, title, figures)
     reason = ""
     if NO_LOGGED_INFERENCE in meta.get("flags", ()):
         reason = (
@@ -249,6 +248,36 @@ def _replay_one(trial, scene, args, epsilon, out: Path, figures: Path) -> dict:
         differences = replay_differences(check.frame, replayed)
         row.update({f"max_diff_{key}": value for key, value in differences.items()})
     return {**row, "steps": int(replayed["t"].nunique()), "status": "replayed", "reason": reason}
+
+
+def _figures(trial: dict, replayed, scene, epsilon: float, title: str, figures: Path) -> None:
+    """FIGURES/<stem>.replay.png, with the log's alpha, and FIGURES/<stem>.path.png: the
+    logged path over the intended path of the trial's task."""
+    import pandas as pd
+
+    from casa_core.assist.tasks import intended_trajectory
+    from casa_core.figures.path import COLUMNS as PATH_COLUMNS
+    from casa_core.figures.path import path_figure
+    from casa_core.figures.replay import replay_figure
+    from casa_core.figures.style import save_figure
+
+    meta, frame = trial["check"].meta, trial["check"].frame
+    stem = figures / trial["stem"].parent / trial["stem"].name
+    logged = frame if "alpha" in frame.columns else None
+    fig = replay_figure(
+        replayed, epsilon=epsilon, title=title, logged=logged, source=meta.get("source")
+    )
+    save_figure(fig, stem.with_name(f"{stem.name}.replay"), formats=("png",))
+    intended = pd.DataFrame(intended_trajectory(meta["task"], scene), columns=PATH_COLUMNS)
+    fig = path_figure(
+        frame,
+        intended,
+        method=meta["method"],
+        title=f"{trial['stem'].as_posix()}: {meta['method']} trial of {meta['participant']} "
+        f"({meta['task']}, {meta['phase']})",
+        source=meta.get("source"),
+    )
+    save_figure(fig, stem.with_name(f"{stem.name}.path"), formats=("png",))
 
 
 def _learned(trial: dict, intents: str | None, participant: str) -> list[Path]:

@@ -34,6 +34,12 @@ def register(commands) -> None:
     command.add_argument("--out-csv", required=True, metavar="CSV", help="stats.csv to write")
     command.add_argument("--out-md", required=True, metavar="MD", help="report to write")
     command.add_argument(
+        "--out-wide",
+        metavar="CSV",
+        help="also write each participant's cell means as one row (one column per task, "
+        "condition and metric), for JASP, SPSS or R",
+    )
+    command.add_argument(
         "--margin",
         action="append",
         default=[],
@@ -64,6 +70,7 @@ def _stats(args) -> int:
     from casa_core import stats
     from casa_core.io.atomic import atomic_paths, frame_to_csv_text
     from casa_core.stats.margins import Margins, parse_margin
+    from casa_core.stats.wide import wide_means
 
     try:
         margins = Margins(
@@ -86,13 +93,18 @@ def _stats(args) -> int:
         likert = read_table(args.likert) if args.likert else None
         table = stats.analyze_study(trials, likert, margins=margins)
         report = stats.report_markdown(table, trials=trials)
+        wide = wide_means(trials) if args.out_wide else None
     except (OSError, ValueError) as error:
         print(f"casa stats: {error}", file=sys.stderr)
         return 1
-    texts = (frame_to_csv_text(table), report)
+    texts = [frame_to_csv_text(table), report]
+    paths = [args.out_csv, args.out_md]
+    if wide is not None:
+        texts.append(frame_to_csv_text(wide))
+        paths.append(args.out_wide)
     try:
-        # The table and its report belong together: both or neither are replaced.
-        with atomic_paths(args.out_csv, args.out_md) as temporaries:
+        # The tables and the report belong together: all or none are replaced.
+        with atomic_paths(*paths) as temporaries:
             for tmp, text in zip(temporaries, texts, strict=True):
                 tmp.write_bytes(text.encode("utf-8"))
     except OSError as error:
@@ -100,7 +112,7 @@ def _stats(args) -> int:
         return cannot_write("stats", folder, error)
     # A test that ran has a p-value or an estimate; a skipped one has neither.
     skipped = int((table["p"].isna() & table["estimate"].isna()).sum())
-    print(f"casa stats: {len(table)} row(s) -> {args.out_csv}, {args.out_md}")
+    print(f"casa stats: {len(table)} row(s) -> {', '.join(map(str, paths))}")
     if skipped:
         print(f"casa stats: {skipped} test(s) skipped, see their note", file=sys.stderr)
     return 0

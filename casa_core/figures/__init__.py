@@ -15,6 +15,7 @@ a :class:`matplotlib.figure.Figure`; :func:`save_figure` writes it as vector PDF
 - :mod:`~casa_core.figures.scene`: a rendering of the arm and scene, with its legend
   (:func:`scene_figure`)
 - :mod:`~casa_core.figures.replay`: a replayed trial: belief, confidence and alpha over time
+- :mod:`~casa_core.figures.path`: a trial's logged path against its task's intended path
 - :mod:`~casa_core.figures.robustness`: the claims under each modelling variant
 - :mod:`~casa_core.figures.power`: power against the number of participants
 - :mod:`~casa_core.figures.calibration`: `casa calibrate`'s posterior predictive check and

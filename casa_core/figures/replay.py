@@ -18,10 +18,19 @@ from casa_core.io import tables
 
 #: The columns the figure reads.
 COLUMNS = ["t", "intent", "beta", "belief", "alpha"]
+#: The columns it reads of the trial's log, for the logged alpha.
+LOGGED_COLUMNS = ["t", "alpha"]
+#: The legend's words of the two alpha lines.
+REPLAYED_LABEL, LOGGED_LABEL = "replayed $\\alpha$", "logged $\\alpha$"
 
 
 def replay_figure(
-    replayed: pd.DataFrame, *, epsilon: float | None = None, title: str | None = None
+    replayed: pd.DataFrame,
+    *,
+    epsilon: float | None = None,
+    title: str | None = None,
+    logged: pd.DataFrame | None = None,
+    source: str | None = None,
 ) -> Figure:
     """Draw one replayed trial's belief, confidence and alpha over time.
 
@@ -33,12 +42,19 @@ def replay_figure(
         The misspecification threshold: a dotted line on the confidence panel.
     title : str, optional
         First words of the caption (e.g. the trial and the settings replayed).
+    logged : DataFrame, optional
+        The trial's log (``t`` and ``alpha``, one row per control tick): its alpha is
+        drawn under the replayed one, as logged.
+    source : str, optional
+        The trial's ``source``; ``"simulated"`` has the caption say the participant is
+        a model.
 
     Returns
     -------
     Figure
         Three axes (belief, confidence, alpha); a table without rows gives three
-        panels with a note.
+        panels with a note. The replayed alpha is held from each step to the next, as
+        the arm applies it.
 
     Examples
     --------
@@ -51,6 +67,9 @@ def replay_figure(
     """
     tables.require_columns(replayed, COLUMNS, "replay")
     rows = tables.numeric_columns(replayed.copy(), ["t", "beta", "belief", "alpha"], "replay")
+    if logged is not None:
+        tables.require_columns(logged, LOGGED_COLUMNS, "trial log")
+        logged = tables.numeric_columns(logged[LOGGED_COLUMNS].copy(), LOGGED_COLUMNS, "trial log")
     goals = list(style.GOAL_COLOURS)
     names = sorted(
         rows["intent"].astype(str).unique(),
@@ -80,26 +99,58 @@ def replay_figure(
             top = max(float(rows["beta"].max()), epsilon or 0.0)
             beta_ax.set_ylim(0, 1.12 * top if top > 0 else 1.0)
             belief_ax.set_ylim(-0.03, 1.05)
-            steps = rows.groupby("t", sort=True)["alpha"].first()
-            alpha_ax.plot(steps.index, steps.to_numpy(), color=style.METHOD_COLOURS["CASA"])
-            alpha_ax.set_ylim(-0.03, 1.05)
+            _alpha_lines(alpha_ax, rows, logged)
             belief_ax.set_ylabel("Belief $P(\\theta \\mid \\xi)$")
             beta_ax.set_ylabel("Confidence $\\hat\\beta_\\theta$")
             alpha_ax.set_ylabel("Control authority $\\alpha$")
             for ax in (belief_ax, beta_ax, alpha_ax):
                 ax.set_xlabel("Time (s)")
             handles, labels = beta_ax.get_legend_handles_labels()
+            more = alpha_ax.get_legend_handles_labels()
+            handles, labels = handles + more[0], labels + more[1]
             fig.legend(handles, labels, loc="outside upper center", ncols=len(labels))
-        style.add_caption(fig, _caption(title, epsilon))
+        style.add_caption(fig, _caption(title, epsilon, logged is not None, source))
     return fig
 
 
-def _caption(title: str | None, epsilon: float | None) -> str:
+def _alpha_lines(ax, rows: pd.DataFrame, logged: pd.DataFrame | None) -> None:
+    """The replayed alpha, held from step to step, over the log's alpha per tick."""
+    if logged is not None and not logged.empty:
+        ax.plot(
+            logged["t"],
+            logged["alpha"],
+            color="0.6",
+            lw=3.0,
+            drawstyle="steps-post",  # each tick's alpha holds until the next tick
+            label=LOGGED_LABEL,
+            zorder=1,
+        )
+    steps = rows.groupby("t", sort=True)["alpha"].first()
+    ax.plot(
+        steps.index,
+        steps.to_numpy(),
+        color=style.METHOD_COLOURS["CASA"],
+        drawstyle="steps-post",
+        label=REPLAYED_LABEL if logged is not None else None,
+        zorder=2,
+    )
+    ax.set_ylim(-0.03, 1.05)
+
+
+def _caption(title: str | None, epsilon: float | None, logged: bool, source) -> str:
     caption = f"{title or 'Replayed trial'}."
     caption += (
         " Inference redone over the logged trajectory: belief and confidence in each"
-        " intent, and the user's control authority under the replayed arbitration."
+        " intent, and the user's control authority under the replayed arbitration"
+        " (held from each inference step to the next)."
     )
+    if logged:
+        caption += (
+            " Wide grey: the alpha the log holds at each control tick, the authority the"
+            " arm applied; the replayed line lies on it where the replay reproduces the"
+            " trial."
+        )
     if epsilon is not None:
         caption += f" Dotted: the misspecification threshold epsilon = {epsilon:g}."
-    return caption
+    note = style.model_note(source)
+    return f"{caption} {note}" if note else caption

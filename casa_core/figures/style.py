@@ -46,6 +46,10 @@ GOAL_COLOURS: dict[str, str] = {"green": "#1A9E3F", "purple": "#7B3294", "red": 
 OTHER_INTENT_COLOURS: tuple[str, ...] = ("#A6611A", "#000000", "#0072B2", "#E69F00")
 
 SIMULATED_NOTE = "simulated participants"
+#: A caption's sentence on data of simulated participants (:func:`model_note`).
+SIMULATED_MODEL_NOTE = (
+    "The participant is simulated: a model of a person's teleoperation, not a person."
+)
 
 #: What the figures call a participant of the tables by its name: the case study's
 #: ``expert`` is not a person but a simulated operator with expert settings that holds
@@ -131,6 +135,17 @@ def source_note(frame: pd.DataFrame) -> str:
     sources = sorted(set(frame["source"].dropna().astype(str)))
     words = {"simulated": SIMULATED_NOTE, "human": "human participants"}
     return " and ".join(words.get(s, f"{s} participants") for s in sources)
+
+
+def model_note(source: str | None) -> str:
+    """The caption's sentence that a simulated participant is a model; empty for others.
+
+    Examples
+    --------
+    >>> model_note("simulated") == SIMULATED_MODEL_NOTE, model_note("human")
+    (True, '')
+    """
+    return SIMULATED_MODEL_NOTE if source == "simulated" else ""
 
 
 def describe(what: str, frame: pd.DataFrame) -> str:

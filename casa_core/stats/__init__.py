@@ -13,6 +13,7 @@ Nothing here knows about robots or files; condition names come from
 - :mod:`~casa_core.stats.margins`: non-inferiority margins from the config;
 - :mod:`~casa_core.stats.descriptives`: the data's source, participants, means and SDs;
 - :mod:`~casa_core.stats.study`: hypotheses H1-H4 as one table (``stats.csv``);
+- :mod:`~casa_core.stats.wide`: the participants' cell means, one row each (``wide.csv``);
 - :mod:`~casa_core.stats.apa`: APA-style text (``stats.md``);
 - :mod:`~casa_core.stats.summary`: the results at a glance (``summary.md``);
 - :mod:`~casa_core.stats.claims`: each claim of the paper judged on a dataset's tables;

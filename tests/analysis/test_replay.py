@@ -103,8 +103,9 @@ def test_cli_on_a_dataset_folder(dataset, tmp_path, capsys):
         _, frame = trial(dataset, method)
         assert len(table) == (len(frame) - 1) // PER_STEP * 2  # steps x (green, purple)
         assert int(rows.loc[method, "steps"]) == (len(frame) - 1) // PER_STEP
-        png = out / "p01" / f"known_goal_{method}.replay.png"
-        assert png.read_bytes().startswith(b"\x89PNG")
+        for figure in ("replay", "path"):
+            png = out / "p01" / f"known_goal_{method}.{figure}.png"
+            assert png.read_bytes().startswith(b"\x89PNG")
     said = capsys.readouterr().out
     assert "2 trial(s) replayed, 1 skipped" in said
     assert "(0 where the trials' own settings are reproduced)" in said

@@ -75,7 +75,7 @@ def test_default_target_covers_every_output_of_every_dataset(repo):
     assert result.returncode == 0, result.stderr
     text = result.stdout + result.stderr
     for ds in ("pilot", "lab"):
-        for name in ("trials", "steps", "likert", "stats", "validation"):
+        for name in ("trials", "steps", "likert", "stats", "wide", "validation"):
             assert f"data/processed/{ds}/{name}.csv" in text
         assert f"data/processed/{ds}/stats.md" in text
         assert f"figures/{ds}/objective.pdf" in text and f"figures/{ds}/objective.png" in text

@@ -172,7 +172,7 @@ def allow_invalid_flag(wildcards=None):
 
 
 def dataset_outputs(ds):
-    tables = ["trials", "steps", "likert", "stats", "validation"]
+    tables = ["trials", "steps", "likert", "stats", "wide", "validation"]
     outputs = [str(PROCESSED / ds / f"{name}.csv") for name in tables]
     outputs.append(str(PROCESSED / ds / "stats.md"))
     # Each claim of the paper with its criterion and verdict (workflow/rules/report.smk).

@@ -1,8 +1,9 @@
 # Per dataset: replay the inference of its assisted trials (PBA and CASA) with each
-# trial's own settings (casa replay, docs/replay.md): one table and one figure per
-# trial, and replay.csv with the largest difference from each log's beta, belief and
-# alpha. After-learning trials run with the intents the dataset keeps in each
-# participant's folder (casa replay --intents unset: docs/replay.md).
+# trial's own settings (casa replay, docs/replay.md): per trial a table and two figures
+# (the replay, with the logged alpha; the path over the task's intended path), and
+# replay.csv with the largest difference from each log's beta, belief and alpha.
+# After-learning trials run with the intents the dataset keeps in each participant's
+# folder (casa replay --intents unset: docs/replay.md).
 
 
 rule replay:

@@ -1,4 +1,5 @@
-# Per dataset: the statistics of H1-H4 (casa_core.stats), as a table and a report.
+# Per dataset: the statistics of H1-H4 (casa_core.stats), as a table and a report, and
+# the participants' cell means they analyse as one wide table (for JASP, SPSS or R).
 
 
 rule stats:
@@ -12,6 +13,7 @@ rule stats:
             category="{ds}",
             subcategory="statistics",
         ),
+        wide=PROCESSED / "{ds}" / "wide.csv",
     log:
         "logs/stats/{ds}.log",
     conda:
@@ -25,4 +27,4 @@ rule stats:
     shell:
         "exec casa stats --trials {input.trials} {params.likert} {params.margins} "
         "--config {params.config} "
-        "--out-csv {output.csv} --out-md {output.md} > {log} 2>&1"
+        "--out-csv {output.csv} --out-md {output.md} --out-wide {output.wide} > {log} 2>&1"
