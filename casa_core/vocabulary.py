@@ -94,6 +94,9 @@ TASK_CONDITIONS = {
 #: The assistant's arbitration under each method (casa_core.assist.assistant.Assistant): NA is
 #: direct teleoperation, PBA distance arbitration with beta = 1, CASA confidence arbitration.
 METHOD_ARBITRATION = {"NA": "none", "PBA": "distance", "CASA": "confidence"}
+#: The arbitration of every method a trial can run: the logged ones and BELIEF, arbitration
+#: on the belief in the most likely intent (the arbitration analysis only: not logged).
+TRIAL_ARBITRATION = {**METHOD_ARBITRATION, "BELIEF": "belief"}
 #: The name of the intent learned in each unknown task.
 LEARNED_NAMES = {"unknown_goal": "learned_red", "unknown_skill": "learned_pour"}
 #: The inference presets (casa_core.assist.presets): this project's, the original

@@ -55,6 +55,7 @@ from casa_core.analysis.replay_settings import (
 )
 from casa_core.assist.assistant import Assistant
 from casa_core.assist.presets import DEFECTS
+from casa_core.assist.trial import inference_ticks, scene_assistant
 from casa_core.defaults import DT, EPSILON, HORIZON
 from casa_core.io.contract import INTENT_PREFIXES, JOINTS
 from casa_core.io.original.numerics import original_rows
@@ -134,9 +135,10 @@ def replay_trial(
     on_waypoints = replay_path(meta, chosen, path) == "waypoints"
     names = intents if intents is not None else meta.get("intents") or list(KNOWN_GOALS)
     teleop = scene.teleop
-    per_step = int(round(DT / teleop.dt))
-    if per_step < 1 or abs(per_step * teleop.dt - DT) > 1e-9:
-        raise ReplayError(f"scene: teleop.dt = {teleop.dt} s does not divide {DT} s")
+    try:
+        per_step = inference_ticks(scene)
+    except ValueError as error:
+        raise ReplayError(str(error)) from None
     t = frame["t"].to_numpy(dtype=float)
     states = _measured_states(frame, point, scene.point)
     # The tick of each row (t = tick * dt); inference runs at each multiple of per_step.
@@ -159,16 +161,7 @@ def replay_trial(
     options = chosen.assistant_options()
     if lam is not None:
         options["lam"] = lam
-    assistant = Assistant(
-        built,
-        arbitration=arbitration,
-        epsilon=epsilon,
-        dt=DT,
-        speed=teleop.speed,
-        rot_speed=teleop.rot_speed,
-        tick=teleop.dt,
-        **options,
-    )
+    assistant = scene_assistant(scene, built, arbitration=arbitration, epsilon=epsilon, **options)
     keys = frame["keys"].fillna("").astype(str).tolist()
     if on_waypoints:
         return pd.DataFrame(

@@ -8,6 +8,8 @@ The modules, each with one job:
 - :mod:`~casa_core.assist.presets`: Presets of inference: the paper's equations, the
   original implementation's numerics, ours.
 - :mod:`~casa_core.assist.tasks`: The study's tasks and the trajectory each one intends.
+- :mod:`~casa_core.assist.trial`: The assistant of one trial in a scene: how often it infers
+  and how it is built.
 """
 
 from casa_core.assist.assistant import (

@@ -38,10 +38,9 @@ from casa_core.defaults import (
     K,
 )
 from casa_core.fixed_order import length
+from casa_core.model import _cores as cores
 from casa_core.model._checks import require_positive
-from casa_core.model.arbitration import _alpha_belief, _alpha_confidence, _alpha_distance, blend
-from casa_core.model.confidence import _beta_hat, _suboptimality
-from casa_core.model.inference import _log_likelihood, _posterior
+from casa_core.model.arbitration import blend
 from casa_core.vocabulary import EVIDENCE
 
 ARBITRATIONS = ("confidence", "distance", "belief", "none")
@@ -280,25 +279,24 @@ class Assistant:
             self._prefix += at_observed - to_go
         if counts:
             self._evidence += 1
-            self._subopt = _suboptimality(self._prefix, to_go, self._optimal)
+            self._subopt = cores.suboptimality(self._prefix, to_go, self._optimal)
         else:
             # Not evidence: the suboptimality stays, and the prefix is rebased on it.
             self._prefix = self._subopt + self._optimal - to_go
         t = min(self._evidence, self.max_evidence)
         # The equations' unchecked cores: costs are finite and t, k, lam were checked once.
         subopt = self.subopt_scale * self._subopt
-        betas = _beta_hat(subopt, t, self.k, self.lam)
+        betas = cores.beta_hat(subopt, t, self.k, self.lam)
         inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
-        belief = _posterior(_log_likelihood(subopt, inference_beta, t, self.k))
+        belief = cores.posterior(cores.log_likelihood(subopt, inference_beta, t, self.k))
         star = int(np.argmax(belief))
         n = len(self.intents)
         alphas = {
-            "confidence": float(_alpha_confidence(float(betas[star]))),
+            "confidence": float(cores.alpha_confidence(float(betas[star]))),
             "distance": float(
-                _alpha_distance(self.intents[star].distance(state), self.pba_distance)
+                cores.alpha_distance(self.intents[star].distance(state), self.pba_distance)
             ),
-            # One intent: a belief of 1 by construction, no evidence; the user keeps control.
-            "belief": float(_alpha_belief(float(belief[star]), n)) if n > 1 else 1.0,
+            "belief": float(cores.alpha_belief(float(belief[star]), n)),
         }
         if t == 0:  # nothing inferred yet: no arbitration assists
             alphas = dict.fromkeys(alphas, 1.0)
@@ -381,6 +379,18 @@ class Assistant:
     def alpha(self) -> float:
         """The user's authority this tick: the latest inference's alpha, 1 before the first."""
         return 1.0 if self.latest is None else self.latest.alpha
+
+    @property
+    def beta(self) -> dict[str, float]:
+        """beta_hat per intent: the latest inference's; 0 before the first (no evidence)."""
+        return dict.fromkeys(self.names, 0.0) if self.latest is None else self.latest.beta
+
+    @property
+    def belief(self) -> dict[str, float]:
+        """The belief per intent: the latest inference's; uniform before the first."""
+        if self.latest is None:
+            return dict.fromkeys(self.names, 1.0 / len(self.names))
+        return self.latest.belief
 
     def record(self, user_action, robot_action=None, *, alpha: float = 1.0) -> None:
         """Keep, for the next inference step, what one tick applied: the user's action T(a)

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from casa_core.model import _cores as cores
 from casa_core.model._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
@@ -39,7 +40,7 @@ def alpha_confidence(beta):
     0.0
     """
     beta = as_finite_or_inf("beta", beta, nonnegative=True)
-    return scalar_or_array(_alpha_confidence(beta))
+    return scalar_or_array(cores.alpha_confidence(beta))
 
 
 def alpha_distance(distance, D):
@@ -67,7 +68,7 @@ def alpha_distance(distance, D):
     """
     distance = as_finite_or_inf("distance", distance, nonnegative=True)
     require_positive(D=D)
-    return scalar_or_array(_alpha_distance(distance, D))
+    return scalar_or_array(cores.alpha_distance(distance, D))
 
 
 def alpha_belief(p_star, n_intents):
@@ -120,9 +121,7 @@ def alpha_belief(p_star, n_intents):
         whole = False
     if not whole or n_intents < 1:
         raise ValueError(f"belief arbitration needs an integer >= 1 intents, got {n_intents!r}")
-    if n_intents == 1:
-        return scalar_or_array(np.ones_like(p_star))
-    return scalar_or_array(_alpha_belief(p_star, n_intents))
+    return scalar_or_array(cores.alpha_belief(p_star, n_intents))
 
 
 def blend(alpha, user_action, robot_action):
@@ -165,20 +164,3 @@ def _checked_blend(alpha, user_action, robot_action):
     user = as_finite_or_inf("user_action", user_action)
     robot = as_finite_or_inf("robot_action", robot_action)
     return alpha * user + (1.0 - alpha) * robot
-
-
-def _alpha_confidence(beta):
-    """:func:`alpha_confidence` on checked input; 1 / 0 is inf, so beta = 0 gives 1."""
-    with np.errstate(divide="ignore"):
-        return np.minimum(1.0, np.divide(1.0, beta))
-
-
-def _alpha_distance(distance, D):
-    """:func:`alpha_distance` on checked input (D > 0)."""
-    return np.minimum(1.0, distance / D)
-
-
-def _alpha_belief(p_star, n_intents):
-    """:func:`alpha_belief` on checked input (n_intents >= 2; 1 intent gives alpha = 1)."""
-    # np.clip's arithmetic (maximum, then minimum) without its overhead on a scalar.
-    return np.minimum(np.maximum(1.0 - (p_star * n_intents - 1.0) / (n_intents - 1.0), 0.0), 1.0)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from casa_core.model import _cores as cores
 from casa_core.model._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
@@ -50,15 +51,10 @@ def suboptimality(prefix_cost, cost_to_go, optimal_cost):
     optimal = as_finite_or_inf("optimal_cost", optimal_cost)
     with np.errstate(invalid="raise"):
         try:
-            subopt = _suboptimality(prefix, to_go, optimal)
+            subopt = cores.suboptimality(prefix, to_go, optimal)
         except FloatingPointError as exc:
             raise ValueError("suboptimality of infinite costs is undefined (inf - inf)") from exc
     return scalar_or_array(subopt)
-
-
-def _suboptimality(prefix, to_go, optimal) -> np.ndarray:
-    """:func:`suboptimality` on checked input (the assistant's per-step path)."""
-    return np.maximum(prefix + to_go - optimal, 0.0)
 
 
 def beta_hat(subopt, t, k, lam=0.0):
@@ -101,18 +97,8 @@ def beta_hat(subopt, t, k, lam=0.0):
     t = as_finite_or_inf("t", t, nonnegative=True)
     lam = as_finite_or_inf("lam", lam, nonnegative=True)
     require_positive(k=k)
-    beta = _beta_hat(subopt, t, k, lam)
+    beta = cores.beta_hat(subopt, t, k, lam)
     # inf / inf (infinite t with infinite suboptimality) has no meaning here.
     if np.isnan(beta).any():
         raise ValueError("beta_hat is undefined for infinite t together with infinite subopt")
     return scalar_or_array(beta)
-
-
-def _beta_hat(subopt: np.ndarray, t, k, lam) -> np.ndarray:
-    """:func:`beta_hat` on checked input (the assistant's per-step path)."""
-    evidence = t * k
-    # + 0.0 turns -0.0 (lam = subopt = -0.0 pass the checks) into 0.0, whose quotient is
-    # +inf; every other value is unchanged.
-    denominator = 2.0 * (lam + subopt) + 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(evidence == 0, 0.0, evidence / denominator)

@@ -11,8 +11,7 @@ prior over intents the posterior (eq. goal_inference) normalizes these likelihoo
 
 from __future__ import annotations
 
-import numpy as np
-
+from casa_core.model import _cores as cores
 from casa_core.model._checks import as_finite_or_inf, require_positive, scalar_or_array
 
 
@@ -47,18 +46,7 @@ def log_likelihood(subopt, beta, t, k):
     beta = as_finite_or_inf("beta", beta, nonnegative=True)
     t = as_finite_or_inf("t", t, nonnegative=True)
     require_positive(k=k)
-    return scalar_or_array(_log_likelihood(subopt, beta, t, k))
-
-
-def _log_likelihood(subopt: np.ndarray, beta: np.ndarray, t, k) -> np.ndarray:
-    """:func:`log_likelihood` on checked input (the assistant's per-step path)."""
-    half_evidence = t * k / 2.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        fit = np.where(subopt == 0, 0.0, -beta * subopt)
-        spread = np.where(half_evidence == 0, 0.0, half_evidence * np.log(beta / (2 * np.pi)))
-        total = fit + spread
-    # inf - inf: beta = inf with S > 0 means the prefix is impossible under the intent.
-    return np.where(np.isnan(total), -np.inf, total)
+    return scalar_or_array(cores.log_likelihood(subopt, beta, t, k))
 
 
 def posterior(log_likelihoods):
@@ -85,23 +73,4 @@ def posterior(log_likelihoods):
     logs = as_finite_or_inf("log_likelihoods", log_likelihoods)
     if logs.ndim == 0 or logs.shape[-1] == 0:
         raise ValueError("log_likelihoods needs a last axis with at least one intent")
-    return _posterior(logs)
-
-
-def _posterior(logs: np.ndarray) -> np.ndarray:
-    """:func:`posterior` on checked input (the assistant's per-step path)."""
-    certain = logs == np.inf
-    if certain.any():
-        # Rows with an intent at +inf share their mass among those; the others as below.
-        has_certain = certain.any(axis=-1, keepdims=True)
-        shared = certain / np.maximum(certain.sum(axis=-1, keepdims=True), 1)
-        return np.where(has_certain, shared, _posterior(np.where(has_certain, 0.0, logs)))
-    top = logs.max(axis=-1, keepdims=True)
-    top = np.where(np.isfinite(top), top, 0.0)
-    weights = np.exp(logs - top)
-    total = weights.sum(axis=-1, keepdims=True)
-    if (total > 0).all():  # the usual case: the same quotient, without the uniform fallback
-        return weights / total
-    uniform = np.full_like(weights, 1.0 / weights.shape[-1])
-    with np.errstate(invalid="ignore"):
-        return np.where(total > 0, weights / total, uniform)
+    return cores.posterior(logs)

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from casa_core.assist.presets import Preset
+from casa_core.assist.trial import inference_ticks
 from casa_core.robot.sim import ArmSimulation
 from casa_core.ros2.messages import (
     FAULTS,
@@ -44,7 +45,6 @@ from casa_core.ros2.messages import (
 from casa_core.scene import Scene
 from casa_core.study.closed_loop import (
     TrialResult,
-    inference_ticks,
     trial_assistant,
     trial_intents,
     trial_meta,
@@ -134,10 +134,6 @@ class AssistLoop:
         self.tick_index = 0
         self.fault: str | None = None
         self._state: np.ndarray | None = None
-        names = self.assistant.names
-        self._beta = dict.fromkeys(names, 0.0)
-        self._belief = dict.fromkeys(names, 1.0 / len(names))
-        self._alpha = 1.0
         self._last_tick: tuple[float, float] | None = None  # (now, elapsed in the step)
 
     def close(self) -> None:
@@ -186,17 +182,12 @@ class AssistLoop:
             self.assistant.reset(state)
         self._state = state
         if self.tick_index > 0 and self.tick_index % self.ticks_per_inference == 0:
-            inference = self.assistant.update(state)
-            self._beta, self._belief, self._alpha = (
-                inference.beta,
-                inference.belief,
-                inference.alpha,
-            )
+            self.assistant.update(state)
         user = np.zeros(4) if fault or action is None else action
         elapsed = (self.tick_index % self.ticks_per_inference) * self.scene.teleop.dt
         self._last_tick = (now, elapsed)
         # Under a fault the robot's share stops: alpha 1 applied, so the evidence sees none.
-        alpha = 1.0 if fault else self._alpha
+        alpha = 1.0 if fault else self.assistant.alpha
         if fault is not None and fault.startswith("joint-state"):
             command = self._still()  # where the arm is, is unknown: no motion at all
         else:
@@ -225,7 +216,7 @@ class AssistLoop:
         tick_time, elapsed = self._last_tick
         state = self._measure(q)
         elapsed += min(max(now - tick_time, 0.0), self.scene.teleop.dt)
-        return self._command(state, action, elapsed, self._alpha, record=False)
+        return self._command(state, action, elapsed, self.assistant.alpha, record=False)
 
     def _command(self, state, user, elapsed, alpha, *, record: bool) -> Command:
         blended = self.assistant.act(state, user, elapsed, alpha=alpha, record=record)
@@ -242,8 +233,8 @@ class AssistLoop:
         row["keys"] = action_keys(user, self.speed, self.rot_speed)
         row["alpha"] = alpha
         row.update({f"q{i + 1}": float(v) for i, v in enumerate(q)})
-        row.update({f"beta:{name}": v for name, v in self._beta.items()})
-        row.update({f"belief:{name}": v for name, v in self._belief.items()})
+        row.update({f"beta:{name}": v for name, v in self.assistant.beta.items()})
+        row.update({f"belief:{name}": v for name, v in self.assistant.belief.items()})
         return row
 
     def _report(self, fault: str | None) -> None:

@@ -30,18 +30,14 @@ import pandas as pd
 from casa_core.assist.assistant import Assistant
 from casa_core.assist.intents import GoalIntent, Intent
 from casa_core.assist.presets import DEFAULT_PRESET, Preset, preset
-from casa_core.defaults import DT
+from casa_core.assist.trial import inference_ticks, scene_assistant
 from casa_core.io import write_trial
 from casa_core.robot.keys import check_keys, format_keys
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import KNOWN_GOALS, Scene
 from casa_core.study.drive import scene_drive
 from casa_core.study.key_sources import KeySource
-from casa_core.vocabulary import METHOD_ARBITRATION as LOGGED_ARBITRATION
-from casa_core.vocabulary import METHODS, POINTS, TASK_PHASES
-
-#: Every method's arbitration, and BELIEF's (the arbitration analysis only).
-METHOD_ARBITRATION = {**LOGGED_ARBITRATION, "BELIEF": "belief"}
+from casa_core.vocabulary import METHODS, POINTS, TASK_PHASES, TRIAL_ARBITRATION
 
 
 @dataclass
@@ -177,8 +173,8 @@ def run_trial(
     -------
     TrialResult
     """
-    if method not in METHOD_ARBITRATION:
-        raise ValueError(f"unknown method {method!r}; expected one of {list(METHOD_ARBITRATION)}")
+    if method not in TRIAL_ARBITRATION:
+        raise ValueError(f"unknown method {method!r}; expected one of {list(TRIAL_ARBITRATION)}")
     phase = default_phase(task) if phase is None else phase
     inference = as_preset(inference)
     if intents is None:
@@ -214,17 +210,6 @@ def run_trial(
     return TrialResult(meta=meta, frame=pd.DataFrame(rows))
 
 
-def inference_ticks(scene: Scene) -> int:
-    """Control ticks per inference step; ValueError unless ``teleop.dt`` divides ``DT``."""
-    dt = scene.teleop.dt
-    ticks = int(round(DT / dt))
-    if ticks < 1 or abs(ticks * dt - DT) > 1e-9:
-        raise ValueError(
-            f"scene: teleop.dt = {dt} s must divide the inference period {DT} s into whole ticks"
-        )
-    return ticks
-
-
 def trial_assistant(
     scene: Scene,
     method: str,
@@ -232,16 +217,12 @@ def trial_assistant(
     inference: Preset,
     assistant_options: dict | None = None,
 ) -> Assistant:
-    """The :class:`Assistant` of one trial: the method's arbitration, the scene's speeds and
-    tick, the preset's inference (``assistant_options`` over it)."""
-    teleop = scene.teleop
-    return Assistant(
+    """The :class:`Assistant` of one trial (:func:`~casa_core.assist.trial.scene_assistant`):
+    the method's arbitration, the preset's inference (``assistant_options`` over it)."""
+    return scene_assistant(
+        scene,
         intents,
-        arbitration=METHOD_ARBITRATION[method],
-        dt=DT,
-        speed=teleop.speed,
-        rot_speed=teleop.rot_speed,
-        tick=teleop.dt,
+        arbitration=TRIAL_ARBITRATION[method],
         **{**inference.assistant_options(), **(assistant_options or {})},
     )
 
@@ -284,10 +265,7 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
     state = drive.start()
     assistant.reset(state)
     names = assistant.names
-    # No evidence before the first inference step: beta_hat = 0, uniform belief.
-    beta = dict.fromkeys(names, 0.0)
-    belief = dict.fromkeys(names, 1.0 / len(names))
-    alpha = 1.0
+    beta, belief, alpha = assistant.beta, assistant.belief, assistant.alpha  # before inference
     rows = []
     # Column names made once (the row's columns, in the log's order).
     q_columns = [f"q{i + 1}" for i in range(len(sim.q))]
@@ -296,8 +274,8 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
     for tick in range(int(round(max_duration / dt)) + 1):
         t = tick * dt
         if tick > 0 and tick % ticks_per_inference == 0:
-            inference = assistant.update(state)
-            beta, belief, alpha = inference.beta, inference.belief, inference.alpha
+            assistant.update(state)
+            beta, belief, alpha = assistant.beta, assistant.belief, assistant.alpha
         held = check_keys(source.keys(t, state))
         x, y, z, rot = state.tolist()
         row = {"t": round(t, 6), "x": x, "y": y, "z": z, "rot": rot, "keys": format_keys(held)}

@@ -9,17 +9,10 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
+from casa_core.model import _cores as cores
 from casa_core.model._checks import require_positive
-from casa_core.model.arbitration import (
-    _alpha_belief,
-    _alpha_confidence,
-    _alpha_distance,
-    alpha_belief,
-    alpha_confidence,
-    alpha_distance,
-    blend,
-)
-from casa_core.model.confidence import _suboptimality, beta_hat, suboptimality
+from casa_core.model.arbitration import alpha_belief, alpha_confidence, alpha_distance, blend
+from casa_core.model.confidence import beta_hat, suboptimality
 from casa_core.model.inference import log_likelihood, posterior
 
 
@@ -209,17 +202,19 @@ def test_blend():
 def test_scalar_arbitration_cores_match_the_public_functions():
     # the assistant's unchecked per-step path (Python floats in) gives the same alphas, exactly
     for beta in (0.0, 0.3, 0.9999999999999999, 1.0, 1.0000000000000002, 2.5, np.inf):
-        assert _alpha_confidence(beta) == alpha_confidence(beta)
+        assert cores.alpha_confidence(beta) == alpha_confidence(beta)
     for d in (0.0, 0.2, 0.55, 3.0):
-        assert _alpha_distance(d, 0.55) == alpha_distance(d, 0.55)
+        assert cores.alpha_distance(d, 0.55) == alpha_distance(d, 0.55)
     for p in (0.0, 0.25, 1 / 3, 0.8, 1.0):
-        assert _alpha_belief(p, 3) == alpha_belief(p, 3)
+        assert cores.alpha_belief(p, 3) == alpha_belief(p, 3)
+    # One intent: the rule lives in the core, so the assistant's path keeps it too.
+    assert cores.alpha_belief(1.0, 1) == alpha_belief(1.0, 1) == 1.0
 
 
 def test_suboptimality_core_is_the_public_formula():
     prefix, to_go, optimal = np.array([3.0, 1.0, 0.1]), np.array([2.0, 2.0, 0.2]), 4.0
     np.testing.assert_array_equal(
-        _suboptimality(prefix, to_go, optimal), suboptimality(prefix, to_go, optimal)
+        cores.suboptimality(prefix, to_go, optimal), suboptimality(prefix, to_go, optimal)
     )
 
 
