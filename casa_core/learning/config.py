@@ -7,8 +7,13 @@ import math
 from dataclasses import dataclass, replace
 
 from casa_core.assist.intents import COST_FORMS
+from casa_core.defaults import COST_PER_METRE, DT
 from casa_core.model._checks import require_positive
 from casa_core.planning import PlannerConfig
+
+#: The learned cost's bound: a goal's ``distance_sum`` cost of one state 0.5 m from it
+#: (COST_PER_METRE rounded to a whole cost per metre, as training was tuned with it).
+COST_SCALE = round(COST_PER_METRE) * DT * 0.5
 
 
 @dataclass(frozen=True)
@@ -29,9 +34,11 @@ class IRLConfig:
         Slope of the leaky ReLU for negative inputs.
     cost_scale : float
         During training the per-state cost is ``cost_scale * sigmoid(network
-        output)``, in [0, cost_scale]. Default 56.75 = 227 * 0.5 s * 0.5 m: what
-        a goal intent's ``distance_sum`` cost charges per state at 0.5 m from
-        its goal (the scale at which training was tuned).
+        output)``, in [0, cost_scale]. Default :data:`COST_SCALE`, 56.75 =
+        227 * 0.5 s * 0.5 m: what a goal intent's ``distance_sum`` cost charges per
+        state at 0.5 m from its goal, with the cost per metre
+        (:data:`~casa_core.defaults.COST_PER_METRE`, 227.27) rounded to a whole number,
+        the scale at which training was tuned.
     calibration : {"path_length", "distance_sum"} or None
         After training, the cost is multiplied by the factor that makes its
         optimal cost from the demonstrations' mean start equal to that of a
@@ -96,7 +103,7 @@ class IRLConfig:
 
     hidden: int = 64
     negative_slope: float = 0.01
-    cost_scale: float = 227.0 * 0.5 * 0.5
+    cost_scale: float = COST_SCALE
     calibration: str | None = "path_length"
     length_scale: float = 0.1
     lr: float = 3e-3

@@ -538,3 +538,17 @@ def test_the_stored_network_shape_is_the_networks_not_the_configs(tmp_path):
     assert entry.metadata["network"]["negative_slope"] == 0.2
     states = np.random.default_rng(0).uniform([0.2, -0.4, 0.1, -1], [0.7, 0.3, 0.5, 2], (20, 4))
     np.testing.assert_array_equal(entry.intent.costs_of(states), intent.costs_of(states))
+
+
+def test_the_learned_costs_bound_is_a_goals_cost_half_a_metre_away():
+    # IRLConfig.cost_scale bounds the learned per-state cost at what a goal intent's
+    # distance_sum cost charges for one state 0.5 m from its goal (GoalIntent's closed
+    # form: COST_PER_METRE * dt * distance), with the cost per metre rounded to a whole
+    # number (227 for 227.27): within that rounding, 0.12%, and derived from it.
+    from casa_core.assist.intents import GoalIntent
+    from casa_core.defaults import COST_PER_METRE, DT
+
+    goal = GoalIntent("g", [0.5, 0.0, 0.0], cost="distance_sum", dt=DT)
+    charged = goal.step_cost(np.zeros(4), np.zeros(4))
+    assert charged == pytest.approx(COST_PER_METRE * DT * 0.5)
+    assert IRLConfig().cost_scale == pytest.approx(charged, rel=0.5 / round(COST_PER_METRE))
