@@ -1,14 +1,14 @@
 """One assistance step: inference, confidence, arbitration and policy blending.
 
 The :class:`Assistant` is fed the arm's state as the trajectory unfolds. At each
-inference step (twice per second in the original, every ``dt``) it updates, per
+inference step (twice per second in the original, every ``period``) it updates, per
 intent, the prefix cost incrementally, the optimal cost-to-go and the
 suboptimality, then beta_hat, the belief over intents, the most likely intent
 theta*, the user's control authority alpha, and whether the intent set looks
 misspecified.
 
 Two rules say what counts as evidence. With no evidence yet (``t = 0``) nothing is
-inferred: the user has full control under every arbitration. At most ``T / dt``
+inferred: the user has full control under every arbitration. At most ``T / period``
 steps count (the horizon's worth): past T, confidence no longer grows with time
 alone, so the verdict on the same behaviour does not depend on how long the trial
 runs. Whether a step in which the user held no key counts is the option
@@ -52,8 +52,8 @@ class Inference:
 
     Attributes
     ----------
-    t : float
-        Seconds since the trial started.
+    time : float
+        Seconds since the trial started, at the end of this step (idle steps included).
     beta : dict
         beta_hat per intent name (the beta used for inference is 1 under PBA).
     belief : dict
@@ -70,10 +70,11 @@ class Inference:
     misspecified : bool
         True when evidence has been seen and every beta_hat is below epsilon.
     evidence_steps : int
-        Steps of evidence the estimates rest on (at most ``T / dt``).
+        Steps of evidence the estimates rest on (at most ``T / period``): the ``t`` of
+        beta_hat and of the likelihood, which counts steps, not seconds.
     """
 
-    t: float
+    time: float
     beta: dict
     belief: dict
     suboptimality: dict
@@ -98,7 +99,9 @@ class Assistant:
         by construction, the user keeps full control: see
         :func:`casa_core.model.arbitration.alpha_belief`); "none" is direct teleoperation (NA).
     k : int, default K
-        Action dimensionality (7 joint velocities).
+        The action's dimensionality in the likelihood's Laplace approximation: 7, the
+        JACO's joint velocities, as in the paper, although the action this assistant
+        blends is the 4-D state velocity (docs/departures.md, "Planning").
     lam : float, default LAM
         Exponential prior rate on beta (MAP estimate; the original used 4).
     epsilon : float, default EPSILON
@@ -109,8 +112,9 @@ class Assistant:
         Factor applied to suboptimality before use (the original divides by 1.8).
     horizon : float, default HORIZON
         T, the episode horizon in seconds (15 in the original).
-    dt : float, default DT
-        Seconds between inference steps and trajectory states (0.5).
+    period : float, default DT
+        The inference period: seconds between inference steps and between the states
+        of the planned trajectories (0.5); not the control tick (``tick``).
     speed, rot_speed : float, default SPEED, ROT_SPEED
         Limits of the robot action u*: m/s for the position, rad/s for rot.
     evidence : {"commanded", "executed"}
@@ -167,7 +171,7 @@ class Assistant:
         pba_distance: float = PBA_DISTANCE,
         subopt_scale: float = SUBOPT_SCALE,
         horizon: float = HORIZON,
-        dt: float = DT,
+        period: float = DT,
         speed: float = SPEED,
         rot_speed: float = ROT_SPEED,
         evidence: str = "commanded",
@@ -185,7 +189,7 @@ class Assistant:
         if len(set(names)) != len(names):
             raise ValueError(f"intent names must be unique, got {names}")
         require_positive("Assistant", k=k, pba_distance=pba_distance, subopt_scale=subopt_scale)
-        require_positive("Assistant", horizon=horizon, dt=dt, tick=tick)
+        require_positive("Assistant", horizon=horizon, period=period, tick=tick)
         require_positive("Assistant", speed=speed, rot_speed=rot_speed)
         # beta_hat >= 0: an epsilon <= 0 (or NaN) would never detect misspecification.
         require_positive("Assistant", epsilon=epsilon)
@@ -200,10 +204,10 @@ class Assistant:
         self.arbitration, self.evidence = arbitration, evidence
         self.k, self.lam, self.epsilon = k, lam, epsilon
         self.pba_distance, self.subopt_scale = pba_distance, subopt_scale
-        self.horizon, self.dt, self.tick = horizon, dt, tick
+        self.horizon, self.period, self.tick = horizon, period, tick
         self.speed, self.rot_speed = speed, rot_speed
         self.idle_is_evidence = bool(idle_is_evidence)
-        self.max_evidence = int(round(horizon / dt))
+        self.max_evidence = int(round(horizon / period))
         self.names = names
         self._start_trial(None)  # the trial's state, set by reset()
 
@@ -247,7 +251,7 @@ class Assistant:
         self.latest: Inference | None = None
 
     def update(self, state, *, user_input: bool | None = None) -> Inference:
-        """Observe the state reached one inference step (``dt``) after the last one.
+        """Observe the state reached one inference step (``period``) after the last one.
 
         ``user_input`` says whether the user gave input during the step; by default,
         whether :meth:`act` was given a nonzero user action since the last step. A
@@ -258,7 +262,7 @@ class Assistant:
         if state.shape != last.shape or not np.isfinite(state).all():
             raise ValueError(f"state must be finite, of shape {last.shape}: {state!r}")
         self._steps += 1
-        time_left = max(self.horizon - self._steps * self.dt, 0.0)
+        time_left = max(self.horizon - self._steps * self.period, 0.0)
         gave_input = self._user_input if user_input is None else bool(user_input)
         counts = self.idle_is_evidence or gave_input
         self._user_input = False
@@ -283,12 +287,13 @@ class Assistant:
         else:
             # Not evidence: the suboptimality stays, and the prefix is rebased on it.
             self._prefix = self._subopt + self._optimal - to_go
-        t = min(self._evidence, self.max_evidence)
-        # The equations' unchecked cores: costs are finite and t, k, lam were checked once.
+        evidence_steps = min(self._evidence, self.max_evidence)
+        # The equations' unchecked cores: costs are finite and k, lam were checked once.
         subopt = self.subopt_scale * self._subopt
-        betas = cores.beta_hat(subopt, t, self.k, self.lam)
+        betas = cores.beta_hat(subopt, evidence_steps, self.k, self.lam)
         inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
-        belief = cores.posterior(cores.log_likelihood(subopt, inference_beta, t, self.k))
+        likelihood = cores.log_likelihood(subopt, inference_beta, evidence_steps, self.k)
+        belief = cores.posterior(likelihood)
         star = int(np.argmax(belief))
         n = len(self.intents)
         alphas = {
@@ -298,7 +303,7 @@ class Assistant:
             ),
             "belief": float(cores.alpha_belief(float(belief[star]), n)),
         }
-        if t == 0:  # nothing inferred yet: no arbitration assists
+        if evidence_steps == 0:  # nothing inferred yet: no arbitration assists
             alphas = dict.fromkeys(alphas, 1.0)
         alpha = 1.0 if self.arbitration == "none" else alphas[self.arbitration]
         if star != self._plan_intent:
@@ -306,15 +311,15 @@ class Assistant:
             self._plan_intent = star
             self._plan_origin = self._steps
         self.latest = Inference(
-            t=self._steps * self.dt,
+            time=self._steps * self.period,
             beta=dict(zip(self.names, betas.tolist(), strict=True)),
             belief=dict(zip(self.names, belief.tolist(), strict=True)),
             suboptimality=dict(zip(self.names, np.atleast_1d(subopt).tolist(), strict=True)),
             intent=self.names[star],
             alpha=alpha,
             alpha_by_arbitration=alphas,
-            misspecified=bool(t > 0 and (betas < self.epsilon).all()),
-            evidence_steps=t,
+            misspecified=bool(evidence_steps > 0 and (betas < self.epsilon).all()),
+            evidence_steps=evidence_steps,
         )
         return self.latest
 
@@ -337,7 +342,7 @@ class Assistant:
             return np.zeros_like(state)
         index = min(self._steps - self._plan_origin + 1, len(self._plan) - 1)
         target = self._plan[index]
-        remaining = max(self.dt - elapsed_in_step, self.dt / 10)
+        remaining = max(self.period - elapsed_in_step, self.period / 10)
         velocity = (target - state) / remaining
         norm = length(velocity[:3])
         if norm > self.speed:

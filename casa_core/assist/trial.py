@@ -42,7 +42,7 @@ def scene_assistant(
     return Assistant(
         intents,
         arbitration=arbitration,
-        dt=DT,
+        period=DT,
         speed=teleop.speed,
         rot_speed=teleop.rot_speed,
         tick=teleop.dt,

@@ -18,7 +18,7 @@ COLUMNS = ["t", "intent", "belief", "beta", "alpha_distance", "alpha_belief", "a
 
 
 def compare_arbitrations(assistant: Assistant, trajectory: np.ndarray) -> pd.DataFrame:
-    """Feed ``trajectory`` (states every ``assistant.dt``, the first the start) to the assistant.
+    """Feed ``trajectory`` (states every ``assistant.period``, the first the start) to it.
 
     Returns
     -------
@@ -37,7 +37,7 @@ def compare_arbitrations(assistant: Assistant, trajectory: np.ndarray) -> pd.Dat
         for name in assistant.names:
             rows.append(
                 (
-                    step.t,
+                    step.time,
                     name,
                     step.belief[name],
                     step.beta[name],

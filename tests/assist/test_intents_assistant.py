@@ -243,7 +243,7 @@ def test_assistant_needs_reset_before_a_trial():
     assert assistant.latest is None
     user = np.array([0.05, 0.0, 0.0, 0.0])
     np.testing.assert_array_equal(assistant.act(START, user), user)  # full control before t = 1
-    assert assistant.update(START, user_input=True).t == 0.5
+    assert assistant.update(START, user_input=True).time == 0.5
     assert assistant.latest is not None
 
 
