@@ -264,8 +264,35 @@ class Assistant:
         self._steps += 1
         time_left = max(self.horizon - self._steps * self.period, 0.0)
         gave_input = self._user_input if user_input is None else bool(user_input)
-        counts = self.idle_is_evidence or gave_input
         self._user_input = False
+        self._observe(state, time_left, counts=self.idle_is_evidence or gave_input)
+        evidence_steps = min(self._evidence, self.max_evidence)
+        # The equations' unchecked cores: costs are finite and k, lam were checked once.
+        subopt = self.subopt_scale * self._subopt
+        betas = cores.beta_hat(subopt, evidence_steps, self.k, self.lam)
+        inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
+        likelihood = cores.log_likelihood(subopt, inference_beta, evidence_steps, self.k)
+        belief = cores.posterior(likelihood)
+        star = int(np.argmax(belief))
+        alphas = self._arbitrate(state, star, betas, belief, evidence_steps)
+        self._replan(state, star, time_left)
+        self.latest = Inference(
+            time=self._steps * self.period,
+            beta=dict(zip(self.names, betas.tolist(), strict=True)),
+            belief=dict(zip(self.names, belief.tolist(), strict=True)),
+            suboptimality=dict(zip(self.names, np.atleast_1d(subopt).tolist(), strict=True)),
+            intent=self.names[star],
+            alpha=1.0 if self.arbitration == "none" else alphas[self.arbitration],
+            alpha_by_arbitration=alphas,
+            misspecified=bool(evidence_steps > 0 and (betas < self.epsilon).all()),
+            evidence_steps=evidence_steps,
+        )
+        return self.latest
+
+    def _observe(self, state: np.ndarray, time_left: float, *, counts: bool) -> None:
+        """The evidence of one step: the prefix costs to the state the user's input reached
+        (the robot's share removed under commanded evidence), the costs-to-go, and the
+        suboptimalities where the step ``counts`` as evidence."""
         observed = state
         motion = self._robot_motion
         if self.evidence == "commanded" and motion is not None and motion.any():
@@ -287,41 +314,27 @@ class Assistant:
         else:
             # Not evidence: the suboptimality stays, and the prefix is rebased on it.
             self._prefix = self._subopt + self._optimal - to_go
-        evidence_steps = min(self._evidence, self.max_evidence)
-        # The equations' unchecked cores: costs are finite and k, lam were checked once.
-        subopt = self.subopt_scale * self._subopt
-        betas = cores.beta_hat(subopt, evidence_steps, self.k, self.lam)
-        inference_beta = np.ones_like(betas) if self.arbitration == "distance" else betas
-        likelihood = cores.log_likelihood(subopt, inference_beta, evidence_steps, self.k)
-        belief = cores.posterior(likelihood)
-        star = int(np.argmax(belief))
-        n = len(self.intents)
-        alphas = {
+
+    def _arbitrate(self, state, star: int, betas, belief, evidence_steps: int) -> dict:
+        """alpha under each arbitration for the most likely intent ``star``; 1 for every
+        one before any evidence (nothing inferred yet: no arbitration assists)."""
+        # The distance is read even then: a planned intent's plans it makes are warm starts.
+        distance = self.intents[star].distance(state)
+        if evidence_steps == 0:
+            return dict.fromkeys(("confidence", "distance", "belief"), 1.0)
+        return {
             "confidence": float(cores.alpha_confidence(float(betas[star]))),
-            "distance": float(
-                cores.alpha_distance(self.intents[star].distance(state), self.pba_distance)
-            ),
-            "belief": float(cores.alpha_belief(float(belief[star]), n)),
+            "distance": float(cores.alpha_distance(distance, self.pba_distance)),
+            "belief": float(cores.alpha_belief(float(belief[star]), len(self.intents))),
         }
-        if evidence_steps == 0:  # nothing inferred yet: no arbitration assists
-            alphas = dict.fromkeys(alphas, 1.0)
-        alpha = 1.0 if self.arbitration == "none" else alphas[self.arbitration]
+
+    def _replan(self, state: np.ndarray, star: int, time_left: float) -> None:
+        """The robot's plan toward the most likely intent, made again when that intent
+        changes (u* follows it: :meth:`robot_action`)."""
         if star != self._plan_intent:
             self._plan = self.intents[star].optimal_trajectory(state, time_left)
             self._plan_intent = star
             self._plan_origin = self._steps
-        self.latest = Inference(
-            time=self._steps * self.period,
-            beta=dict(zip(self.names, betas.tolist(), strict=True)),
-            belief=dict(zip(self.names, belief.tolist(), strict=True)),
-            suboptimality=dict(zip(self.names, np.atleast_1d(subopt).tolist(), strict=True)),
-            intent=self.names[star],
-            alpha=alpha,
-            alpha_by_arbitration=alphas,
-            misspecified=bool(evidence_steps > 0 and (betas < self.epsilon).all()),
-            evidence_steps=evidence_steps,
-        )
-        return self.latest
 
     def _costs_to_go(self, states, time_left: float) -> np.ndarray:
         """Costs-to-go ``(n_intents, n_states)``; each intent plans its states at once."""
