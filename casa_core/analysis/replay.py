@@ -168,6 +168,16 @@ def replay_trial(
             _replay_waypoints(assistant, path_states, logged, t, keys), columns=list(COLUMNS)
         )
     applied = frame["alpha"].to_numpy(dtype=float) if "alpha" in frame else np.ones(len(t))
+    rows = _replay_ticks(assistant, states, t, ticks, keys, applied, scene)
+    return pd.DataFrame(rows, columns=list(COLUMNS))
+
+
+def _replay_ticks(assistant: Assistant, states, t, ticks, keys, applied, scene) -> list[dict]:
+    """The assistant fed the log tick by tick, as the closed loop was: an inference step at
+    each multiple of the ticks per step, and after every row but the last the keys' action
+    with the authority ``applied`` (the logged alpha)."""
+    teleop = scene.teleop
+    per_step = inference_ticks(scene)
     rows: list[dict] = []
     assistant.reset(states[0])
     done: set[int] = set()
@@ -180,7 +190,7 @@ def replay_trial(
             action = keys_to_action(parse_keys(keys[i]), teleop.speed, teleop.rot_speed)
             elapsed = (tick % per_step) * teleop.dt
             assistant.act(states[i], action, elapsed_in_step=elapsed, alpha=applied[i])
-    return pd.DataFrame(rows, columns=list(COLUMNS))
+    return rows
 
 
 def _step_rows(t: float, step, names) -> list[dict]:
