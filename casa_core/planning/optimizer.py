@@ -247,18 +247,7 @@ def optimize(
         return Plan(starts_np[:, None, :].copy(), np.zeros(batch), 0)
     scale = config.max_step()
     start_u = starts_np / scale
-    if warm_start is not None and initial_guess is not None:
-        raise ValueError("give warm_start or initial_guess, not both")
-    if warm_start is None and initial_guess is None:
-        guess = np.repeat(start_u[:, None, :], n_steps, axis=1)
-    else:
-        given = np.asarray(initial_guess if warm_start is None else warm_start, dtype=float)
-        if given.shape != (batch, n_steps, 4) or not np.isfinite(given).all():
-            raise ValueError(
-                f"warm_start/initial_guess must be finite with shape {(batch, n_steps, 4)}, "
-                f"got {given.shape}"
-            )
-        guess = given / scale
+    guess = _first_guess(start_u, n_steps, scale, warm_start, initial_guess)
     if warm_start is None:
         budget, lr = config.iterations, config.lr
     else:
@@ -278,14 +267,7 @@ def optimize(
     norm = config.limit == "norm"
     iterations = 0
     for iterations in range(1, budget + 1):  # noqa: B007 (the count is reported)
-        if value_and_grad is None:
-            x = torch.from_numpy(states_u).requires_grad_(True)
-            summed = state_cost(x * scale_t).sum(dim=1)
-            (gradient,) = torch.autograd.grad(summed.sum(), x)
-            row_costs, grad = summed.detach().numpy(), gradient.numpy()
-        else:  # a numpy cost with its own gradient (no autograd)
-            per_state, grad = value_and_grad(states_u * scale)
-            row_costs = per_state.sum(axis=1)
+        row_costs, grad = _costs_and_gradient(state_cost, value_and_grad, states_u, scale, scale_t)
         # Best iterate, Adam step, walk and the largest move, in one compiled loop.
         moved = _kernels.adam_step(
             states_u,
@@ -306,13 +288,49 @@ def optimize(
         if moved < config.tol:
             break
     states = np.concatenate([starts_np[:, None, :], states_u * scale], axis=1)
+    states, costs = _best_of(state_cost, states, best_u * scale, best_cost)
+    return Plan(states=states, costs=costs, iterations=iterations)
+
+
+def _costs_and_gradient(state_cost, value_and_grad, states_u, scale, scale_t):
+    """Each row's summed cost and the gradient in the states (step units): by autograd, or
+    by the cost's own ``value_and_grad`` on numpy arrays (its gradient in metres)."""
     if value_and_grad is None:
+        x = torch.from_numpy(states_u).requires_grad_(True)
+        summed = state_cost(x * scale_t).sum(dim=1)
+        (gradient,) = torch.autograd.grad(summed.sum(), x)
+        return summed.detach().numpy(), gradient.numpy()
+    per_state, grad = value_and_grad(states_u * scale)
+    return per_state.sum(axis=1), grad
+
+
+def _first_guess(start_u, n_steps: int, scale, warm_start, initial_guess) -> np.ndarray:
+    """The states after the start the optimizer begins from, in step units: staying at
+    the start, or the warm start or initial guess given (checked)."""
+    batch = start_u.shape[0]
+    if warm_start is not None and initial_guess is not None:
+        raise ValueError("give warm_start or initial_guess, not both")
+    if warm_start is None and initial_guess is None:
+        return np.repeat(start_u[:, None, :], n_steps, axis=1)
+    given = np.asarray(initial_guess if warm_start is None else warm_start, dtype=float)
+    if given.shape != (batch, n_steps, 4) or not np.isfinite(given).all():
+        raise ValueError(
+            f"warm_start/initial_guess must be finite with shape {(batch, n_steps, 4)}, "
+            f"got {given.shape}"
+        )
+    return given / scale
+
+
+def _best_of(state_cost, states: np.ndarray, best: np.ndarray, best_cost: np.ndarray):
+    """Per row, the last iterate ``states`` (start included) with its cost, or the best
+    iterate seen (``best``, after the start) where that cost less."""
+    if getattr(state_cost, "value_and_grad", None) is None:
         with torch.no_grad():
             costs = state_cost(torch.from_numpy(states[:, 1:, :])).sum(dim=1).numpy().copy()
     else:
         costs = state_cost(states[:, 1:, :]).sum(axis=1)
     keep = best_cost < costs
     if keep.any():
-        states[keep, 1:, :] = best_u[keep] * scale
+        states[keep, 1:, :] = best[keep]
         costs[keep] = best_cost[keep]
-    return Plan(states=states, costs=costs, iterations=iterations)
+    return states, costs
