@@ -134,19 +134,35 @@ def joint_velocities(linear, angular, q, state, reference, rotation, action, gai
     for i in range(4):
         if not math.isfinite(action[i]):
             return np.empty(0)
-    dt, max_lag, position_gain, orientation_gain, damping, null_gain = (
-        gains[0],
-        gains[1],
-        gains[2],
-        gains[3],
-        gains[4],
-        gains[5],
-    )
     jac = np.empty((6, _N))
     for j in range(_N):
         for i in range(3):
             jac[i, j] = linear[i][j]
             jac[3 + i, j] = angular[i][j]
+    twist = _twist(state, reference, rotation, action, gains)
+    inv_weight, centring = _joint_weights(q, gains[5])
+    step = _damped_solve(jac, inv_weight, centring, twist, gains[4])
+    qdot = np.empty(_N)
+    excess = 0.0
+    for j in range(_N):
+        total = 0.0
+        for i in range(6):
+            total += jac[i, j] * step[i]
+        qdot[j] = centring[j] + inv_weight[j] * total
+    qdot[6] -= action[3]
+    for j in range(_N):
+        excess = max(excess, abs(qdot[j]) / _SPEED[j])
+    if excess > 1.0:
+        for j in range(_N):
+            qdot[j] /= excess
+    return qdot
+
+
+@njit(cache=True)
+def _twist(state, reference, rotation, action, gains):
+    """The tool twist ``(6,)`` asked of the arm: the action plus the gains' pull toward the
+    reference (advanced in place by the action, its lag bounded) and its orientation."""
+    dt, max_lag, position_gain, orientation_gain = gains[0], gains[1], gains[2], gains[3]
     lag = np.empty(4)
     for i in range(4):
         lag[i] = min(max(reference[i] - state[i], -max_lag), max_lag)
@@ -170,6 +186,13 @@ def joint_velocities(linear, angular, q, state, reference, rotation, action, gai
     twist[3] = orientation_gain * (0.5 * (delta[2, 1] - delta[1, 2]))
     twist[4] = orientation_gain * (0.5 * (delta[0, 2] - delta[2, 0]))
     twist[5] = orientation_gain * (0.5 * (delta[1, 0] - delta[0, 1]))
+    return twist
+
+
+@njit(cache=True)
+def _joint_weights(q, null_gain):
+    """W^-1 (the bounded joints weighted down near their limits) and the null-space
+    centring c of the bounded joints toward the middle of their range."""
     inv_weight = np.ones(_N)
     centring = np.zeros(_N)
     for b in range(len(_BOUNDED_INDEX)):
@@ -181,6 +204,12 @@ def joint_velocities(linear, angular, q, state, reference, rotation, action, gai
         gradient /= 4 * to_lower**2 * to_upper**2
         inv_weight[j] = 1.0 / (1.0 + gradient)
         centring[j] = (_MIDDLE_B[b] - q[j]) * null_gain
+    return inv_weight, centring
+
+
+@njit(cache=True)
+def _damped_solve(jac, inv_weight, centring, twist, damping):
+    """(J W^-1 J^T + damping^2 I)^-1 (twist - J c), by Cholesky."""
     # gram = J W^-1 J^T + damping^2 I (symmetric positive definite), rhs = twist - J c.
     gram = np.empty((6, 6))
     rhs = np.empty(6)
@@ -212,20 +241,7 @@ def joint_velocities(linear, angular, q, state, reference, rotation, action, gai
         for m in range(i + 1, 6):
             total -= gram[m, i] * rhs[m]
         rhs[i] = total / gram[i, i]
-    qdot = np.empty(_N)
-    excess = 0.0
-    for j in range(_N):
-        total = 0.0
-        for i in range(6):
-            total += jac[i, j] * rhs[i]
-        qdot[j] = centring[j] + inv_weight[j] * total
-    qdot[6] -= action[3]
-    for j in range(_N):
-        excess = max(excess, abs(qdot[j]) / _SPEED[j])
-    if excess > 1.0:
-        for j in range(_N):
-            qdot[j] /= excess
-    return qdot
+    return rhs
 
 
 @njit(cache=True)
