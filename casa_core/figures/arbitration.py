@@ -141,6 +141,6 @@ def arbitration_figure(
         )
         if epsilon is not None:
             caption += f" Dotted: the misspecification threshold epsilon = {epsilon:g}."
-        style.add_caption(fig, caption, style.setup_line(setup))
+        style.add_setup_caption(fig, caption, setup)
     fig.axes_by_name = axes  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig

@@ -157,7 +157,7 @@ def case_study_figure(
             if ax.has_data():
                 ax.set_xlabel("Time (s)")
         _intent_legend(fig, grid[:, :2].ravel())
-        style.add_caption(fig, _caption(rows, participant, epsilon, title), style.setup_line(setup))
+        style.add_setup_caption(fig, _caption(rows, participant, epsilon, title), setup)
     fig.axes_grid = axes_grid  # type: ignore[attr-defined]  # our attribute on the Figure
     return fig
 

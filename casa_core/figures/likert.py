@@ -177,33 +177,38 @@ def likert_figure(
                 ax.yaxis.set_tick_params(labelleft=True)
                 break
         _bars.condition_legend(fig, axes)
-        what = title or "Likert scores"
-        if answered_by_model(rows):
-            what += (
-                " (model output: answers computed by the simulated participants' model,"
-                " not people's ratings)"
-            )
-        caption = style.describe(what, rows)
-        caption += (
-            " Bars: mean ± standard error over participants of the answer to: the robot"
-            " understood how I wanted the task done; made the interaction more effortless;"
-            " the assistance was useful (1 = strongly disagree, 7 = strongly agree);"
-            " points: participants' answers, spread sideways."
-        )
-        if stats is not None:
-            caption += (
-                " Stars under each question: Friedman test over the task's conditions (n.s.:"
-                f" p ≥ {_p_text(SIGNIFICANCE)}). Brackets:"
-                f" Wilcoxon signed-rank tests of {TASK_LABELS[KNOWN_TASK]}'s CASA, and of"
-                " CASA after learning in the other tasks, against each other condition,"
-                " Holm-corrected over those comparisons per task and question; shown where"
-                f" p < {_p_text(SIGNIFICANCE)} (alpha); * p < .05, ** p < .01, *** p < .001;"
-                " < or > before the stars: the left bar's mean below or above the right one's;"
-                " dashed: against the paper's direction (Known Goal's CASA, or CASA after"
-                " learning, rated above the other condition), solid: in it."
-            )
-        style.add_caption(fig, caption, style.setup_line(setup))
+        style.add_setup_caption(fig, _caption(rows, title, stats is not None), setup)
     return fig
+
+
+def _caption(rows: pd.DataFrame, title: str | None, with_tests: bool) -> str:
+    """The figure's caption: what is drawn, from whom, and the tests (``with_tests``)."""
+    what = title or "Likert scores"
+    if answered_by_model(rows):
+        what += (
+            " (model output: answers computed by the simulated participants' model,"
+            " not people's ratings)"
+        )
+    caption = style.describe(what, rows)
+    caption += (
+        " Bars: mean ± standard error over participants of the answer to: the robot"
+        " understood how I wanted the task done; made the interaction more effortless;"
+        " the assistance was useful (1 = strongly disagree, 7 = strongly agree);"
+        " points: participants' answers, spread sideways."
+    )
+    if with_tests:
+        caption += (
+            " Stars under each question: Friedman test over the task's conditions (n.s.:"
+            f" p ≥ {_p_text(SIGNIFICANCE)}). Brackets:"
+            f" Wilcoxon signed-rank tests of {TASK_LABELS[KNOWN_TASK]}'s CASA, and of"
+            " CASA after learning in the other tasks, against each other condition,"
+            " Holm-corrected over those comparisons per task and question; shown where"
+            f" p < {_p_text(SIGNIFICANCE)} (alpha); * p < .05, ** p < .01, *** p < .001;"
+            " < or > before the stars: the left bar's mean below or above the right one's;"
+            " dashed: against the paper's direction (Known Goal's CASA, or CASA after"
+            " learning, rated above the other condition), solid: in it."
+        )
+    return caption
 
 
 def _p_text(p: float) -> str:

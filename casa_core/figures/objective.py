@@ -261,21 +261,26 @@ def objective_figure(
                 pooled |= used_pooled
                 _bars.draw_brackets(ax, brackets)
             axes[0].set_ylabel(label)
-        for ax, task in zip(grid[-1], columns, strict=True):
-            in_task = rows[rows["task"] == task]
-            if in_task[SUCCESS].isna().all():
-                style.note_axes(ax, "no success in the data")
-                continue
-            _bars.draw_proportions(ax, in_task, SUCCESS)
-        grid[-1][0].set_ylabel(SUCCESS_AXIS)
+        _draw_success(grid[-1], rows, columns)
         for ax, task in zip(grid[0], columns, strict=True):
             ax.set_title(TASK_LABELS[task] if task else "")
         for ax in grid.flat:
             ax.set_xticks([])
         _bars.condition_legend(fig, grid.flat, extra=[TIMED_OUT_LABEL])
         caption = " ".join([_caption(rows, stats, pooled, title), *notes])
-        style.add_caption(fig, caption, style.setup_line(setup))
+        style.add_setup_caption(fig, caption, setup)
     return fig
+
+
+def _draw_success(axes, rows: pd.DataFrame, columns: list) -> None:
+    """The last row of panels: each column's success rate (a note where none is known)."""
+    for ax, task in zip(axes, columns, strict=True):
+        in_task = rows[rows["task"] == task]
+        if in_task[SUCCESS].isna().all():
+            style.note_axes(ax, "no success in the data")
+            continue
+        _bars.draw_proportions(ax, in_task, SUCCESS)
+    axes[0].set_ylabel(SUCCESS_AXIS)
 
 
 def _caption(rows: pd.DataFrame, stats, pooled: bool, title: str | None) -> str:

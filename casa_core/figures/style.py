@@ -236,6 +236,12 @@ def add_caption(fig: Figure, text: str, last_line: str = "") -> None:
         fig.text(0.5, -0.02, wrapped, ha="center", va="top", fontsize=7, color="0.25")
 
 
+def add_setup_caption(fig: Figure, text: str, setup: str | None) -> None:
+    """The caption of a figure drawn from the study's tables: ``text``, then the line
+    naming the ``setup`` the data come from (:func:`setup_line`; none without one)."""
+    add_caption(fig, text, setup_line(setup))
+
+
 def _atomic_savefig(fig: Figure, path: Path, **kwargs) -> None:
     """Write ``fig`` to ``path`` atomically (:func:`casa_core.io.atomic.atomic_path`)."""
     with atomic_path(path) as tmp, context():

@@ -9,6 +9,12 @@ the same states give the same bits on every run and on every processor, whatever
 kernel the processor would get. They are compiled once per machine and cached (next to
 this file, or in numba's user cache directory where the package is read-only).
 
+The formula these loops compute is defined once, in torch:
+:func:`casa_core.learning.features.bounded_cost` on
+:func:`~casa_core.learning.features.cost_logits`; ``tests/learning/test_speed_equivalence.py``
+checks them against it (:func:`costs` alone to float64 rounding, the whole cost and its
+gradient to float32 rounding of the network's sums).
+
 States are float64 ``(n, 4)`` rows ``[x, y, z, rot]``; the network's inputs and layers
 are float32 ``(n, 12 + 4K)`` and ``(n, H)`` for K objects and H hidden units, the inputs
 in the order of :func:`casa_core.learning.features.state_features`.
@@ -154,7 +160,8 @@ def leaky_relu_backward(grad, h, slope):
 def costs(logits, cost_scale, offset, values, slopes):
     """``values = cost_scale * sigmoid(logits) - offset`` and its slopes in the logits.
 
-    In float64 from the float32 ``logits``; ``slopes`` (float32) is
+    :func:`casa_core.learning.features.bounded_cost` with ``offset``, written out: in
+    float64 from the float32 ``logits``; ``slopes`` (float32) is
     ``cost_scale * sigmoid * (1 - sigmoid)`` (only where ``slopes`` has rows).
     """
     for i in range(logits.shape[0]):

@@ -6,8 +6,16 @@ A learned intent's per-state cost is
 
 with x(s) the features of state ``s = [x, y, z, rot]`` (:func:`state_features`) and
 f_phi a network of 2 hidden layers of leaky-ReLU units (:func:`cost_network`). The
-sigmoid bounds the cost to [0, cost_scale]; :func:`bounded_cost` is the one place
-the formula is written.
+sigmoid bounds the cost to [0, cost_scale]. A learned intent subtracts its constant
+``cost_offset`` from it (:class:`~casa_core.learning.NeuralIntent`).
+
+:func:`bounded_cost` on :func:`cost_logits` is the definition of the formula, offset
+included: training and :meth:`NeuralIntent.state_cost
+<casa_core.learning.NeuralIntent.state_cost>` call it. The planner runs a compiled
+copy for speed (:class:`~casa_core.learning.numpy_cost.NumpyStateCost`, whose loops are
+:func:`casa_core.learning._kernels.cost`); ``tests/learning/test_speed_equivalence.py``
+checks that copy against this definition on the same states, values and gradients, to
+float32 rounding of the network's sums.
 
 Input features, in this order (:func:`feature_names`):
     1. end-effector rotation matrix R(rot), row-major (9;
@@ -116,12 +124,20 @@ def cost_logits(network, states: torch.Tensor, *, objects: torch.Tensor, length_
     return network_output(network, inputs)[..., 0].double()
 
 
-def bounded_cost(logits: torch.Tensor, cost_scale: float, *, mean_trajectory: bool = False):
-    """The per-state cost ``cost_scale * sigmoid(logits)``, in [0, cost_scale].
+def bounded_cost(
+    logits: torch.Tensor,
+    cost_scale: float,
+    *,
+    offset: float = 0.0,
+    mean_trajectory: bool = False,
+):
+    """The per-state cost ``cost_scale * sigmoid(logits) - offset``.
 
-    With ``mean_trajectory``, ``logits`` are ``(B, n)`` (B trajectories of n states)
-    and the result is the trajectories' mean cost (the per-state costs summed along
-    each, averaged over B), the scale applied last as in training.
+    Without ``offset`` it lies in [0, cost_scale]. With ``mean_trajectory``,
+    ``logits`` are ``(B, n)`` (B trajectories of n states) and the result is the
+    trajectories' mean cost (the per-state costs summed along each, averaged over B),
+    the scale applied last as in training, which cannot see a constant offset (every
+    trajectory has n states): no ``offset`` then.
 
     Examples
     --------
@@ -130,10 +146,14 @@ def bounded_cost(logits: torch.Tensor, cost_scale: float, *, mean_trajectory: bo
     [[2.0, 2.0, 2.0], [2.0, 2.0, 2.0]]
     >>> bounded_cost(torch.zeros(2, 3, dtype=torch.float64), 4.0, mean_trajectory=True).item()
     6.0
+    >>> bounded_cost(torch.zeros(1, 2, dtype=torch.float64), 4.0, offset=0.5).tolist()
+    [[1.5, 1.5]]
     """
     if mean_trajectory:
+        if offset:
+            raise ValueError("the mean trajectory cost of training has no offset")
         return cost_scale * torch.sigmoid(logits).sum(dim=1).mean()
-    return cost_scale * torch.sigmoid(logits)
+    return cost_scale * torch.sigmoid(logits) - offset
 
 
 def object_positions(objects: Mapping) -> tuple[list[str], np.ndarray]:

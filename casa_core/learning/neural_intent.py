@@ -17,8 +17,10 @@ from casa_core.planning import Plan, PlannedIntent, PlannerConfig
 class NeuralIntent(PlannedIntent):
     """An intent whose per-state cost is a learned network (deep MaxEnt IRL).
 
-    ``state_cost(s) = cost_scale * sigmoid(network(state_features(s))) - cost_offset``
-    (:func:`casa_core.learning.features.bounded_cost`); the prefix cost, optimal
+    ``state_cost(s) = cost_scale * sigmoid(network(state_features(s))) - cost_offset``,
+    defined by :func:`casa_core.learning.features.bounded_cost`; the planner runs its
+    compiled copy, :attr:`planning_cost` (checked equal in
+    ``tests/learning/test_speed_equivalence.py``). The prefix cost, optimal
     cost-to-go, optimal trajectory and distance come from it and the planner
     (:class:`casa_core.planning.PlannedIntent`).
 
@@ -115,7 +117,7 @@ class NeuralIntent(PlannedIntent):
         logits = cost_logits(
             self.network, states, objects=self._objects_t, length_scale=self.length_scale
         )
-        return bounded_cost(logits, self.cost_scale) - self.cost_offset
+        return bounded_cost(logits, self.cost_scale, offset=self.cost_offset)
 
 
 def calibrate(intent: NeuralIntent, start, *, cost: str) -> tuple[NeuralIntent, float]:

@@ -3,18 +3,22 @@
 The planner evaluates a learned cost and its gradient in the states thousands of
 times per learned intent, on a few hundred states at a time. For a network this
 small, torch's per-operation and autograd overhead costs several times the
-arithmetic; :class:`NumpyStateCost` computes the same formula
-(:mod:`casa_core.learning.features`: features in float64, the network in float32,
-the sigmoid in float64) and its gradient by hand (the chain rule through the
-network and the features), with no autograd and no BLAS: all of it in compiled loops
-of a fixed order (:mod:`casa_core.learning._kernels`), into work arrays kept per row
-count, so the planner's results do not depend on the processor's BLAS kernel. Training
+arithmetic; :class:`NumpyStateCost` is a copy, for speed, of the formula whose
+definition is :func:`casa_core.learning.features.bounded_cost` on
+:func:`~casa_core.learning.features.cost_logits` (features in float64, the network in
+float32, the sigmoid in float64, the offset subtracted last), with its gradient by
+hand (the chain rule through the network and the features), with no autograd and no
+BLAS: all of it in compiled loops of a fixed order (:mod:`casa_core.learning._kernels`),
+into work arrays kept per row count, so the planner's results do not depend on the
+processor's BLAS kernel. Training
 the network's weights stays in torch (:mod:`casa_core.learning.network`: the same
 products, with autograd).
 
-The values agree with the torch formula to float32 rounding (the matrix products
-sum in another order): ``tests/learning/test_speed_equivalence.py`` checks costs and
-gradients against torch's autograd.
+The values agree with the definition to float32 rounding (the matrix products sum in
+another order): ``tests/learning/test_speed_equivalence.py`` checks costs and gradients
+against it and torch's autograd on the same states, and a learned intent's
+:attr:`~casa_core.learning.NeuralIntent.planning_cost` against its
+:meth:`~casa_core.learning.NeuralIntent.state_cost`, offset included.
 
 Examples
 --------
@@ -87,7 +91,7 @@ def _work_arrays(n: int, n_inputs: int, hidden: int, k: int) -> tuple:
 
 
 class NumpyStateCost:
-    """``cost_scale * sigmoid(network(features(s))) - offset`` and its gradient, in numpy.
+    """:func:`~casa_core.learning.features.bounded_cost` with ``offset`` and its gradient.
 
     A snapshot of the network's weights at construction: build a new one after the
     weights change. Not reentrant (it reuses its work arrays): one call at a time.
@@ -101,7 +105,7 @@ class NumpyStateCost:
     length_scale, cost_scale : float
         As in :mod:`casa_core.learning.features`.
     offset : float
-        Subtracted from every per-state cost.
+        Subtracted from every per-state cost (a learned intent's ``cost_offset``).
     """
 
     def __init__(self, network, *, objects, length_scale: float, cost_scale: float, offset=0.0):

@@ -35,7 +35,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from casa_core.defaults import ROT_SPEED, SPEED
+from casa_core.defaults import ROT_SPEED, SPEED, TICK
 from casa_core.fixed_order import dot, length
 from casa_core.robot.keys import AXIS_KEYS, keys_to_action
 from casa_core.study import _operator_kernels as _kernels
@@ -49,6 +49,8 @@ NOISE_TIME = 0.5
 #: The perception noise per axis x, y, z relative to ``perception_noise``: twice in depth (x).
 DEPTH_NOISE = np.array([2.0, 1.0, 1.0])
 LOOKAHEAD = 0.04  # m of path ahead that the participant steers toward
+#: How many path points ahead of its progress the participant looks for the nearest.
+WINDOW = 40
 DONE_ROT_TOLERANCE = 0.15  # rad
 #: A held key goes up at a third of the deadband (hysteresis); by the same ratio, an
 #: operator waiting at the path's end steers again only when it sees the arm three times
@@ -114,8 +116,8 @@ class SimulatedParticipant:
         The intended trajectory ``[t, x, y, z, rot]``.
     rng : numpy.random.Generator
         The participant's own stream of randomness.
-    tick : float
-        Control period, s (0.05).
+    tick : float, default TICK
+        Control period, s (:data:`casa_core.defaults.TICK`).
     """
 
     def __init__(
@@ -124,7 +126,7 @@ class SimulatedParticipant:
         reference,
         *,
         rng: np.random.Generator,
-        tick: float = 0.05,
+        tick: float = TICK,
     ):
         self.params = params
         self.reference = np.asarray(reference, dtype=float)[:, 1:5]
@@ -161,7 +163,7 @@ class SimulatedParticipant:
         # Done while it judges itself arrived: it lets go and watches, and steers again
         # if the arm is seen to leave (a trial of fixed length goes on after arrival).
         self.done = error is None
-        self._held = frozenset() if error is None else self._choose_keys(error)
+        self._held = frozenset() if error is None else self._choose_keys(error, t)
         return self._held
 
     def _perceive(self) -> np.ndarray:
@@ -187,9 +189,9 @@ class SimulatedParticipant:
 
     def _track(self, perceived: np.ndarray) -> int:
         """Advance the progress along the path to ``perceived``; the steering point's index."""
-        # The nearest of the next 40 path points, then LOOKAHEAD of path further on.
+        # The nearest of the next WINDOW path points, then LOOKAHEAD of path further on.
         progress, ahead = _kernels.track(
-            self._scaled, self._steps, self._progress, perceived, 40, LOOKAHEAD, ROT_TO_METRES
+            self._scaled, self._steps, self._progress, perceived, WINDOW, LOOKAHEAD, ROT_TO_METRES
         )
         self._progress = int(progress)
         return int(ahead)
@@ -205,7 +207,8 @@ class SimulatedParticipant:
             and abs(perceived[3] - final[3]) < DONE_ROT_TOLERANCE * scale
         )
 
-    def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
+    def _choose_keys(self, error: np.ndarray, t: float) -> frozenset[str]:
+        """The keys that answer ``error`` during the tick starting at ``t``."""
         # Python floats: the same products as numpy's on 4 numbers, without its overhead.
         error = error.tolist()
         magnitude = [abs(e) * s for e, s in zip(error, _SCALE_FLOATS, strict=True)]
@@ -261,7 +264,7 @@ class PredictiveParticipant(SimulatedParticipant):
         reference,
         *,
         rng,
-        tick: float = 0.05,
+        tick: float = TICK,
         speed: float = SPEED,
         rot_speed: float = ROT_SPEED,
         bout: float = BOUT,
@@ -283,7 +286,6 @@ class PredictiveParticipant(SimulatedParticipant):
         self._commanded = np.zeros(4)
         self._history: deque[tuple[float, np.ndarray]] = deque()
         self._taken: tuple[float, np.ndarray] | None = None
-        self._now = 0.0
         self._changed_at = -np.inf
         self._bout_from = 0.0  # when the keys went down after none were held
         self._watch_until = -np.inf
@@ -295,34 +297,32 @@ class PredictiveParticipant(SimulatedParticipant):
         self._commanded = self._commanded + keys_to_action(held, *self._speeds) * self.tick
         return held
 
-    def _choose_keys(self, error: np.ndarray) -> frozenset[str]:
-        now = self._now
-        if now < self._watch_until - 1e-9:
+    def _choose_keys(self, error: np.ndarray, t: float) -> frozenset[str]:
+        if t < self._watch_until - 1e-9:
             return frozenset()
-        if self._held and now - self._bout_from >= self.bout - 1e-9:
+        if self._held and t - self._bout_from >= self.bout - 1e-9:
             if self._pulled_back > self.params.deadband:
                 # Seen pulled off without its keys: no look needed, the bout goes on.
-                self._bout_from = now
+                self._bout_from = t
             else:
                 # The bout is over: let go, and watch until the arm without keys is seen.
-                self._watch_until = now + self.params.reaction_time
-                self._changed_at = now
+                self._watch_until = t + self.params.reaction_time
+                self._changed_at = t
                 return frozenset()
-        chosen = super()._choose_keys(error)
+        chosen = super()._choose_keys(error, t)
         if chosen == self._held:
             return chosen
         # A press waits out the refractory interval of the last change; a release
         # never waits, and starts the interval like any other response.
-        if not chosen < self._held and now - self._changed_at < REFRACTORY - 1e-9:
+        if not chosen < self._held and t - self._changed_at < REFRACTORY - 1e-9:
             return self._held
-        self._changed_at = now
+        self._changed_at = t
         if chosen and not self._held:
-            self._bout_from = now
+            self._bout_from = t
         return chosen
 
     def _error(self, perceived: np.ndarray, t: float) -> np.ndarray | None:
         """The displacement the operator's keys must add within :data:`LEAD_TIME`."""
-        self._now = t
         now, drift = self._estimate_now(perceived, t)
         ahead = self._track(now)
         if self._arrived(now, ahead):
@@ -363,7 +363,7 @@ def make_participant(
     reference,
     *,
     rng: np.random.Generator,
-    tick: float = 0.05,
+    tick: float = TICK,
     operator: str,
     speed: float = SPEED,
     rot_speed: float = ROT_SPEED,

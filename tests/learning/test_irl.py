@@ -11,6 +11,7 @@ from casa_core.learning import (
     IRLConfig,
     MaxEntIRL,
     NeuralIntent,
+    bounded_cost,
     cost_network,
     demo_waypoints,
     end_match,
@@ -216,6 +217,14 @@ def test_cost_is_bounded():
     )
     costs = intent.costs_of(np.array([START, [0.1, 0.2, 0.3, 1.0]]))
     assert ((costs >= -2.0) & (costs <= 8.0)).all()
+
+
+def test_the_training_cost_refuses_an_offset():
+    # Training's mean trajectory cost cannot see a constant offset (bounded_cost): asked
+    # for one, it says so rather than subtract it once per state.
+    logits = torch.zeros(2, 3, dtype=torch.float64)
+    with pytest.raises(ValueError, match="no offset"):
+        bounded_cost(logits, 4.0, offset=1.0, mean_trajectory=True)
 
 
 def test_learning_evidence_of_the_pouring_intent():

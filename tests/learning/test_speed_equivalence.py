@@ -1,7 +1,9 @@
 """The fast paths compute what the plain ones compute (speed work must not change results).
 
 Each fast path is checked against the plain computation it replaces: the numpy learned
-cost and its hand-written gradient against torch's autograd on the same network, the
+cost and its hand-written gradient against the definition
+(:func:`casa_core.learning.features.bounded_cost`, offset included) and torch's autograd
+on the same network, a learned intent's planning cost against its state cost, the
 written-out Adam against ``torch.optim.Adam``, the compiled walk and optimizer step
 against a walk on Python floats and the array formulas,
 the vector length against ``numpy.linalg.norm``, and plans with the numpy cost against
@@ -58,8 +60,8 @@ def random_states(rng, shape=(5, 30)):
 def torch_cost_and_grad(net, states, cost_scale, offset):
     x = torch.from_numpy(states).requires_grad_(True)
     objects = torch.from_numpy(POSITIONS)
-    values = bounded_cost(cost_logits(net, x, objects=objects, length_scale=0.1), cost_scale)
-    values = values - offset
+    logits = cost_logits(net, x, objects=objects, length_scale=0.1)
+    values = bounded_cost(logits, cost_scale, offset=offset)
     (grad,) = torch.autograd.grad(values.sum(), x)
     return values.detach().numpy(), grad.numpy()
 
@@ -102,6 +104,50 @@ def test_numpy_cost_gradient_on_an_object_and_far_away():
     assert np.isfinite(grad).all()
     np.testing.assert_allclose(values, want_values, rtol=FLOAT32_SUMS, atol=10.0 * FLOAT32_TAIL)
     np.testing.assert_allclose(grad, want_grad, rtol=FLOAT32_GRADIENT, atol=FLOAT32_GRADIENT)
+
+
+def test_the_compiled_sigmoid_and_offset_are_bounded_cost_to_float64_rounding():
+    # The same float32 logits into _kernels.costs and into the definition: torch's
+    # sigmoid and the kernel's 1 / (1 + exp(-x)) are each within about an ulp of the
+    # exact value (libm exp), so they agree to a few float64 ulp (4 eps relative;
+    # measured 2.5); the offset's subtraction rounds once more, on the scale of
+    # cost_scale (4 eps absolute per unit of cost_scale; measured 1.1). Logits across
+    # the sigmoid's range, its saturated tails included.
+    eps = np.finfo(float).eps
+    rng = np.random.default_rng(7)
+    logits = np.concatenate([rng.normal(0.0, 5.0, 2000), rng.uniform(-80.0, 80.0, 2000)])
+    logits = np.append(logits, [0.0, -700.0, 700.0]).astype(np.float32)
+    values, slopes = np.empty(len(logits)), np.empty(len(logits), dtype=np.float32)
+    for offset, rtol, atol in ((0.0, 4 * eps, 0.0), (1.5, 0.0, 4 * eps * 56.75)):
+        learning_kernels.costs(logits, 56.75, offset, values, slopes)
+        want = bounded_cost(torch.from_numpy(logits).double(), 56.75, offset=offset).numpy()
+        np.testing.assert_allclose(values, want, rtol=rtol, atol=atol)
+
+
+def test_a_learned_intents_planning_cost_is_its_state_cost_offset_included():
+    # NeuralIntent hands its one cost_offset to both: the compiled planning cost and the
+    # definition agree as in test_numpy_cost_and_gradient_equal_torch_autograd (absolute
+    # tolerance: the offset brings values near zero), and each is the intent's cost
+    # without the offset less the offset (an offset is one rounding, of order 1e-14).
+    net = network(32, 4)
+    states = random_states(np.random.default_rng(4), (3, 17))
+
+    def intent(offset):
+        return NeuralIntent(
+            "n", net, objects=OBJECTS, cost_scale=56.75, length_scale=0.1, cost_offset=offset
+        )
+
+    offset, plain = intent(2.25), intent(0.0)
+    values, grad = offset.planning_cost.value_and_grad(states)
+    x = torch.from_numpy(states).requires_grad_(True)
+    want = offset.state_cost(x)
+    (want_grad,) = torch.autograd.grad(want.sum(), x)
+    atol = 56.75 * FLOAT32_TAIL
+    np.testing.assert_allclose(values, want.detach().numpy(), rtol=FLOAT32_SUMS, atol=atol)
+    np.testing.assert_allclose(grad, want_grad, rtol=FLOAT32_GRADIENT, atol=FLOAT32_GRADIENT)
+    np.testing.assert_allclose(plain.planning_cost(states) - values, 2.25, rtol=1e-12)
+    unoffset = plain.state_cost(torch.from_numpy(states)) - want.detach()
+    np.testing.assert_allclose(unoffset.numpy(), 2.25, rtol=1e-12)
 
 
 def test_numpy_cost_results_outlive_its_work_arrays():

@@ -171,6 +171,19 @@ def test_continuous_control_is_the_special_case_of_no_bout_limit():
         PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0), bout=0)
 
 
+def test_the_predictive_operator_times_its_presses_by_the_tick_it_is_given():
+    # The refractory rule on the time passed in, nothing else: a press at 0 s, a second
+    # key wanted 0.1 s later is held back (REFRACTORY = 0.25 s after the last change),
+    # and pressed at 0.3 s. EXPERT presses no wrong keys, so no draw decides a key.
+    reference = intended_trajectory("known_goal", SCENE)
+    operator = PredictiveParticipant(EXPERT, reference, rng=np.random.default_rng(0))
+    along_x, along_x_and_y = np.array([0.1, 0.0, 0.0, 0.0]), np.array([0.1, 0.1, 0.0, 0.0])
+    operator._held = operator._choose_keys(along_x, 0.0)
+    assert operator._held == {"x+"}
+    assert operator._choose_keys(along_x_and_y, 0.1) == {"x+"}
+    assert operator._choose_keys(along_x_and_y, 0.3) == {"x+", "y+"}
+
+
 def _keyboard_floor(displacement: np.ndarray, max_keys: int) -> float:
     """The shortest path from 0 to ``displacement`` with at most ``max_keys`` keys held,
     each moving one axis at the same speed: steps along one axis (1 key), face diagonals

@@ -56,12 +56,12 @@ class NumpyLookahead(part.SimulatedParticipant):
     def _track(self, perceived):
         here = perceived.copy()
         here[3] *= part.ROT_TO_METRES
-        window = self._scaled[self._progress : self._progress + 40]
+        window = self._scaled[self._progress : self._progress + part.WINDOW]
         self._progress += int(np.linalg.norm(window - here, axis=1).argmin())
         path = np.cumsum(self._steps[self._progress :])
         return self._progress + int(path.searchsorted(part.LOOKAHEAD))
 
-    def _choose_keys(self, error):
+    def _choose_keys(self, error, t):
         magnitude = np.abs(error) * part._SCALE
         held_axes = {
             axis
