@@ -209,23 +209,7 @@ class MaxEntIRL:
             )
             training = _Training(network, positions, waypoints, n_steps, config)
             history, candidates, converged = training.run(self.progress)
-            start = waypoints[:, 0, :].mean(axis=0)
-
-            def build(weights_of: torch.nn.Module, offset: float):
-                intent = NeuralIntent(
-                    name,
-                    weights_of,
-                    objects=dict(zip(object_names, positions, strict=True)),
-                    cost_scale=config.cost_scale,
-                    length_scale=config.length_scale,
-                    planner=config.assist_planner(),
-                    guides=[waypoints.mean(axis=0)],
-                    cost_offset=offset,
-                )
-                if config.calibration is None:
-                    return intent, None
-                return calibrate(intent, start, cost=config.calibration)
-
+            build = _intent_builder(name, object_names, positions, waypoints, config)
             intent, kept, factor = _verified_choice(
                 candidates,
                 history,
@@ -248,6 +232,29 @@ class MaxEntIRL:
         self.kept_iteration_ = kept
         self.calibration_ = factor
         return self
+
+
+def _intent_builder(name: str, object_names, positions, waypoints: np.ndarray, config: IRLConfig):
+    """``build(network, offset)``: the learned intent of a candidate network, calibrated
+    from the demonstrations' mean start when the config calibrates, with its factor."""
+    start = waypoints[:, 0, :].mean(axis=0)
+
+    def build(weights_of: torch.nn.Module, offset: float):
+        intent = NeuralIntent(
+            name,
+            weights_of,
+            objects=dict(zip(object_names, positions, strict=True)),
+            cost_scale=config.cost_scale,
+            length_scale=config.length_scale,
+            planner=config.assist_planner(),
+            guides=[waypoints.mean(axis=0)],
+            cost_offset=offset,
+        )
+        if config.calibration is None:
+            return intent, None
+        return calibrate(intent, start, cost=config.calibration)
+
+    return build
 
 
 class _Training:
