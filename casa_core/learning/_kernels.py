@@ -23,12 +23,48 @@ in the order of :func:`casa_core.learning.features.state_features`.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
 #: Squared length added under a distance's square root (features.state_features: 1 mm).
 DISTANCE_EPS = 1e-6
+
+
+class Layers(NamedTuple):
+    """The network's weights as the loops read them: the forward pass multiplies by
+    W^T, the backward pass by W (contiguous copies), with zero biases for the latter."""
+
+    w1_t: np.ndarray
+    b1: np.ndarray
+    w2_t: np.ndarray
+    b2: np.ndarray
+    w3_t: np.ndarray
+    b3: np.ndarray
+    w2: np.ndarray
+    w1: np.ndarray
+    w3: np.ndarray  # the output layer's one row
+    no_hidden_bias: np.ndarray
+    no_input_bias: np.ndarray
+
+
+class Work(NamedTuple):
+    """The scratch arrays of one call on ``n`` states (the features, the forward pass, the
+    backward pass), reused between calls of the same ``n``."""
+
+    inputs: np.ndarray
+    cos_sin: np.ndarray
+    distances: np.ndarray
+    h1: np.ndarray
+    a1: np.ndarray
+    h2: np.ndarray
+    a2: np.ndarray
+    logits: np.ndarray
+    slopes: np.ndarray
+    d_h2: np.ndarray
+    d_h1: np.ndarray
+    d_inputs: np.ndarray
 
 
 @numba.njit(cache=True)
@@ -212,20 +248,18 @@ def features_backward(d_inputs, states, objects, length_scale, basis, cos_sin, d
 def cost(states, objects, length_scale, basis, layers, slope, cost_scale, offset, work, values):
     """The whole learned cost of ``states`` into ``values``, in one call (no gradient).
 
-    ``layers`` is ``(W1^T, b1, W2^T, b2, W3^T, b3, W2, W1, w3, zeros(H), zeros(n_in))``
-    and ``work`` ``(inputs, cos_sin, distances, h1, a1, h2, a2, logits_column, slopes,
-    d_h2, d_h1, d_inputs)`` (:class:`~casa_core.learning.numpy_cost.NumpyStateCost`'s
-    arrays); :func:`features`, the three :func:`linear` layers with their leaky ReLUs and
-    :func:`costs`, as the separate calls would run them.
+    ``layers`` (:class:`Layers`) and ``work`` (:class:`Work`) are
+    :class:`~casa_core.learning.numpy_cost.NumpyStateCost`'s arrays; :func:`features`,
+    the three :func:`linear` layers with their leaky ReLUs and :func:`costs`, as the
+    separate calls would run them.
     """
-    inputs, cos_sin, distances, h1, a1, h2, a2, column, slopes = work[:9]
-    features(states, objects, length_scale, basis, inputs, cos_sin, distances)
-    linear(inputs, layers[0], layers[1], h1)
-    leaky_relu(h1, slope, a1)
-    linear(a1, layers[2], layers[3], h2)
-    leaky_relu(h2, slope, a2)
-    linear(a2, layers[4], layers[5], column)
-    costs(column[:, 0], cost_scale, offset, values, slopes)
+    features(states, objects, length_scale, basis, work.inputs, work.cos_sin, work.distances)
+    linear(work.inputs, layers.w1_t, layers.b1, work.h1)
+    leaky_relu(work.h1, slope, work.a1)
+    linear(work.a1, layers.w2_t, layers.b2, work.h2)
+    leaky_relu(work.h2, slope, work.a2)
+    linear(work.a2, layers.w3_t, layers.b3, work.logits)
+    costs(work.logits[:, 0], cost_scale, offset, values, work.slopes)
 
 
 @numba.njit(cache=True)
@@ -238,9 +272,10 @@ def cost_and_gradient(
     transposed products, :func:`leaky_relu_backward`), then :func:`features_backward`.
     """
     cost(states, objects, length_scale, basis, layers, slope, cost_scale, offset, work, values)
-    inputs, cos_sin, distances, h1, a1, h2, a2, column, slopes, d_h2, d_h1, d_inputs = work
-    output_backward(slopes, layers[8], h2, slope, d_h2)
-    linear(d_h2, layers[6], layers[9], d_h1)
-    leaky_relu_backward(d_h1, h1, slope)
-    linear(d_h1, layers[7], layers[10], d_inputs)
-    features_backward(d_inputs, states, objects, length_scale, basis, cos_sin, distances, grad)
+    output_backward(work.slopes, layers.w3, work.h2, slope, work.d_h2)
+    linear(work.d_h2, layers.w2, layers.no_hidden_bias, work.d_h1)
+    leaky_relu_backward(work.d_h1, work.h1, slope)
+    linear(work.d_h1, layers.w1, layers.no_input_bias, work.d_inputs)
+    features_backward(
+        work.d_inputs, states, objects, length_scale, basis, work.cos_sin, work.distances, grad
+    )

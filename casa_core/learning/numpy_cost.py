@@ -78,8 +78,8 @@ def _linear_layers(network: torch.nn.Sequential) -> tuple[list, float]:
     return layers, float(slopes.pop())
 
 
-def _work_arrays(n: int, n_inputs: int, hidden: int, k: int) -> tuple:
-    """The work arrays of ``n`` rows, in the order of :func:`_kernels.cost`'s ``work``."""
+def _work_arrays(n: int, n_inputs: int, hidden: int, k: int) -> _kernels.Work:
+    """The work arrays of ``n`` rows (:class:`_kernels.Work`)."""
 
     def new(*shape):
         return np.empty(shape, dtype=np.float32)
@@ -87,7 +87,7 @@ def _work_arrays(n: int, n_inputs: int, hidden: int, k: int) -> tuple:
     features = (new(n, n_inputs), np.empty((n, 2)), np.empty((n, k)))
     forward = tuple(new(n, hidden) for _ in range(4)) + (new(n, 1), new(n))
     backward = (new(n, hidden), new(n, hidden), new(n, n_inputs))
-    return features + forward + backward
+    return _kernels.Work(*features, *forward, *backward)
 
 
 class NumpyStateCost:
@@ -112,9 +112,11 @@ class NumpyStateCost:
         layers, slope = _linear_layers(network)
         (w1, b1), (w2, b2), (w3, b3) = layers
         # The forward pass multiplies by W^T, the backward pass by W (contiguous copies).
-        self._layers = tuple(
-            np.ascontiguousarray(a) for a in (w1.T, b1, w2.T, b2, w3.T, b3, w2, w1, w3[0])
-        ) + (np.zeros(w1.shape[0], dtype=np.float32), np.zeros(w1.shape[1], dtype=np.float32))
+        self._layers = _kernels.Layers(
+            *(np.ascontiguousarray(a) for a in (w1.T, b1, w2.T, b2, w3.T, b3, w2, w1, w3[0])),
+            np.zeros(w1.shape[0], dtype=np.float32),
+            np.zeros(w1.shape[1], dtype=np.float32),
+        )
         self._shape = (w1.shape[1], w1.shape[0])  # inputs, hidden units
         # float32, as torch's leaky ReLU multiplies by it.
         self._slope = np.float32(slope)
@@ -122,13 +124,13 @@ class NumpyStateCost:
         self.length_scale = float(length_scale)
         self.cost_scale = float(cost_scale)
         self.offset = float(offset)
-        self._buffers: dict[int, tuple] = {}
+        self._buffers: dict[int, _kernels.Work] = {}
 
     def __getstate__(self):
         # A copy (deepcopy) gets its own, empty work arrays: they are scratch, not state.
         return {**self.__dict__, "_buffers": {}}
 
-    def _work(self, states) -> tuple[np.ndarray, tuple, tuple]:
+    def _work(self, states) -> tuple[np.ndarray, tuple, _kernels.Work]:
         """The flat states ``(n, 4)``, their leading shape and the work arrays of ``n`` rows."""
         states = np.asarray(states, dtype=float)
         flat = np.ascontiguousarray(states.reshape(-1, 4))
