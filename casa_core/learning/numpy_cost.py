@@ -84,10 +84,20 @@ def _work_arrays(n: int, n_inputs: int, hidden: int, k: int) -> _kernels.Work:
     def new(*shape):
         return np.empty(shape, dtype=np.float32)
 
-    features = (new(n, n_inputs), np.empty((n, 2)), np.empty((n, k)))
-    forward = tuple(new(n, hidden) for _ in range(4)) + (new(n, 1), new(n))
-    backward = (new(n, hidden), new(n, hidden), new(n, n_inputs))
-    return _kernels.Work(*features, *forward, *backward)
+    return _kernels.Work(
+        inputs=new(n, n_inputs),
+        cos_sin=np.empty((n, 2)),
+        distances=np.empty((n, k)),
+        h1=new(n, hidden),
+        a1=new(n, hidden),
+        h2=new(n, hidden),
+        a2=new(n, hidden),
+        logits=new(n, 1),
+        slopes=new(n),
+        d_h2=new(n, hidden),
+        d_h1=new(n, hidden),
+        d_inputs=new(n, n_inputs),
+    )
 
 
 class NumpyStateCost:
@@ -112,10 +122,19 @@ class NumpyStateCost:
         layers, slope = _linear_layers(network)
         (w1, b1), (w2, b2), (w3, b3) = layers
         # The forward pass multiplies by W^T, the backward pass by W (contiguous copies).
+        contiguous = np.ascontiguousarray
         self._layers = _kernels.Layers(
-            *(np.ascontiguousarray(a) for a in (w1.T, b1, w2.T, b2, w3.T, b3, w2, w1, w3[0])),
-            np.zeros(w1.shape[0], dtype=np.float32),
-            np.zeros(w1.shape[1], dtype=np.float32),
+            w1_t=contiguous(w1.T),
+            b1=contiguous(b1),
+            w2_t=contiguous(w2.T),
+            b2=contiguous(b2),
+            w3_t=contiguous(w3.T),
+            b3=contiguous(b3),
+            w2=contiguous(w2),
+            w1=contiguous(w1),
+            w3=contiguous(w3[0]),
+            no_hidden_bias=np.zeros(w1.shape[0], dtype=np.float32),
+            no_input_bias=np.zeros(w1.shape[1], dtype=np.float32),
         )
         self._shape = (w1.shape[1], w1.shape[0])  # inputs, hidden units
         # float32, as torch's leaky ReLU multiplies by it.
