@@ -20,6 +20,7 @@ import pandas as pd
 from casa_core.defaults import SIGNIFICANCE
 from casa_core.io.tables import numeric_column, require_columns
 from casa_core.stats._rows import noninferiority_level
+from casa_core.stats._tables import participants_shortfall
 from casa_core.stats.apa import p_value
 from casa_core.stats.margins import PAPER_ALPHA
 from casa_core.stats.study import POOLED, _conditions, _prepare_trials
@@ -57,7 +58,9 @@ class Check:
     paper's direction (``"CASA after learning below NA (...)"``), for the hypothesis'
     criterion; ``reason`` is why it did not pass, in short and without numbers
     (``"significant, but in the opposite direction"``; empty when it passed), and the
-    text ends with the outcome and the same reason with its numbers.
+    text ends with the outcome and the same reason with its numbers. ``shortfall`` is
+    ``(got, needed)`` participants when it is undecided because a test it needs was not
+    computed for too few participants (the skip note of stats.csv), else None.
     """
 
     passed: bool | None
@@ -66,18 +69,21 @@ class Check:
     form: str = ""
     requirement: str = ""
     reason: str = ""
+    shortfall: tuple[int, int] | None = None
 
 
 class Part(NamedTuple):
     """One condition of a check: met (None: undecided), its numbers, why it is not met.
 
-    ``reason`` is the short reason (no numbers), ``why`` the same with its numbers.
+    ``reason`` is the short reason (no numbers), ``why`` the same with its numbers;
+    ``shortfall`` as :attr:`Check.shortfall`.
     """
 
     passed: bool | None
     text: str
     reason: str = ""
     why: str = ""
+    shortfall: tuple[int, int] | None = None
 
 
 def _outcome(passed: bool | None, why: str = "") -> str:
@@ -109,8 +115,24 @@ def _rows(stats, hypothesis, task, metric, analysis, **where) -> pd.DataFrame:
     return stats[chosen]
 
 
+#: The reason of a check undecided because a test needs more participants.
+TOO_FEW = "too few participants"
+
+
+def _shortfall(rows: pd.DataFrame) -> tuple[int, int] | None:
+    """``(got, needed)`` participants of a skipped test, from its note in stats.csv."""
+    if rows.empty or "note" not in rows.columns:
+        return None
+    return participants_shortfall(rows["note"].iloc[0])
+
+
 def _significant(rows: pd.DataFrame, name: str) -> Part:
     if rows.empty or not np.isfinite(rows["p"].iloc[0]):
+        shortfall = _shortfall(rows)
+        if shortfall is not None:
+            got, needed = shortfall
+            text = f"{name} not computed ({got} participants, needs {needed})"
+            return Part(None, text, TOO_FEW, text, shortfall)
         return Part(None, f"{name} not computed", "test not computed", f"{name} not computed")
     p = float(rows["p"].iloc[0])
     why = f"not significant ({name} {p_value(p)})"
@@ -158,7 +180,8 @@ def _combine(form: str, metric: str, parts: list[Part], requirement: str = "") -
     reason = ", and ".join(dict.fromkeys(part.reason for part in deciding))
     why = ", and ".join(part.why for part in deciding)
     text = f"{metric} ({form}): {', '.join(part.text for part in parts)}: {_outcome(passed, why)}"
-    return Check(passed, text, metric, form, requirement, reason)
+    shortfalls = [part.shortfall for part in deciding if part.shortfall]
+    return Check(passed, text, metric, form, requirement, reason, min(shortfalls, default=None))
 
 
 def _where(task: str) -> str:
@@ -286,8 +309,10 @@ def noninferiority(stats, *, hypothesis, task, metric, new, reference) -> list[C
             checks.append(Check(False, text, **keys, reason=why))
             continue
         if row.empty or not np.isfinite(row["ci_high"].iloc[0]):
-            text = f"{name}: bound not computed: {_outcome(None, 'bound not computed')}"
-            checks.append(Check(None, text, **keys, reason="bound not computed"))
+            shortfall = _shortfall(row)
+            reason = "bound not computed" if shortfall is None else TOO_FEW
+            text = f"{name}: bound not computed: {_outcome(None, reason)}"
+            checks.append(Check(None, text, **keys, reason=reason, shortfall=shortfall))
             continue
         bound = float(row["ci_high"].iloc[0])
         flag = _noninferior_flag(row["noninferior"].iloc[0])

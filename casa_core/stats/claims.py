@@ -25,7 +25,10 @@ from casa_core.vocabulary import KNOWN_TASK, LEARNED_NAMES, UNKNOWN_TASKS
 CLAIM_COLUMNS = ["claim", "statement", "criterion", "measured", "value", "verdict", "details"]
 #: H4's verdict when the Likert answers are a model's output, whatever they show.
 MODEL_OUTPUT = "not testable: model output"
-VERDICTS = ("holds", "partly", "differs", "not testable", MODEL_OUTPUT)
+#: A hypothesis' verdict when a test it needs was not computed for too few participants;
+#: the verdict names the participants and the number needed (:func:`too_few`).
+TOO_FEW = "not testable: too few participants"
+VERDICTS = ("holds", "partly", "differs", "not testable", MODEL_OUTPUT, TOO_FEW)
 #: A claim about every participant holds when it is seen in at least 90% of the trials:
 #: one trial in 11 (the paper's participants) may miss it, two may not.
 HOLDS_SHARE = 0.9
@@ -63,6 +66,29 @@ STATEMENTS = {
     "what they want, feel less interaction effort, and find the assistance more useful "
     'with CASA after learning than with any other baseline."',
 }
+
+
+def too_few(got: int, needed: int) -> str:
+    """The verdict of a hypothesis whose test needs ``needed`` participants, ``got`` given.
+
+    >>> too_few(2, 3)
+    'not testable: too few participants (2, needs 3)'
+    """
+    return f"{TOO_FEW} ({got}, needs {needed})"
+
+
+def verdict_kind(verdict: str) -> str:
+    """The member of :data:`VERDICTS` a verdict is: itself, or :data:`TOO_FEW` for
+    :func:`too_few`'s; a ``ValueError`` names any other.
+
+    >>> verdict_kind("not testable: too few participants (2, needs 3)")
+    'not testable: too few participants'
+    """
+    if verdict in VERDICTS:
+        return verdict
+    if str(verdict).startswith(f"{TOO_FEW} ("):
+        return TOO_FEW
+    raise ValueError(f"unknown verdict {verdict!r}; expected one of {', '.join(VERDICTS)}")
 
 
 def _share_verdict(hits: int, total: int) -> str:
@@ -269,7 +295,8 @@ def _hypothesis(claim: str, checks: list[tests.Check]) -> dict:
     """H1-H3: every check of both forms passes (holds), at least half do (partly)."""
     criterion = (
         f"{_requirements(checks)}holds: every check below testable and passed; partly: at least "
-        f"{PARTLY_SHARE:.0%} of the checks passed; differs: fewer"
+        f"{PARTLY_SHARE:.0%} of the checks passed; differs: fewer; not testable: too few "
+        "participants when a check's test was not computed for want of participants"
     )
     details = "\n".join(check.text for check in checks)
     share, verdict = _verdict(checks)
@@ -296,7 +323,14 @@ FORM_NAMES = dict(zip(tests.FORMS, ("paper form", "within subjects"), strict=Tru
 
 def _verdict(checks: list[tests.Check]) -> tuple[float, str]:
     """The share of checks passed and the verdict: holds when all pass, partly when at
-    least :data:`PARTLY_SHARE` do, not testable when none is decided."""
+    least :data:`PARTLY_SHARE` do; not testable when none is decided, and
+    :func:`too_few` when a check is undecided because a test it needs was not computed
+    for too few participants (holds asks every check to be decided, so the verdict
+    waits for the participants the test needs)."""
+    shortfalls = [check.shortfall for check in checks if check.passed is None and check.shortfall]
+    if shortfalls:
+        got = min(got for got, _ in shortfalls)
+        return np.nan, too_few(got, max(needed for _, needed in shortfalls))
     if not any(check.passed is not None for check in checks):
         return np.nan, "not testable"
     share = sum(bool(check.passed) for check in checks) / len(checks)
@@ -412,8 +446,11 @@ def evaluate_claims(tables: Mapping[str, pd.DataFrame | None], *, epsilon: float
 __all__ = [
     "CLAIM_COLUMNS",
     "MODEL_OUTPUT",
+    "TOO_FEW",
     "VERDICTS",
     "answered_by_model",
     "evaluate_claims",
+    "too_few",
     "trial_outcomes",
+    "verdict_kind",
 ]

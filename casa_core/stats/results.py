@@ -15,7 +15,14 @@ import pandas as pd
 
 from casa_core.io.tables import require_columns
 from casa_core.stats import _claim_tests as tests
-from casa_core.stats.claims import CLAIM_COLUMNS, MODEL_OUTPUT, answered_by_model
+from casa_core.stats.claims import (
+    CLAIM_COLUMNS,
+    MODEL_OUTPUT,
+    TOO_FEW,
+    answered_by_model,
+    verdict_kind,
+)
+from casa_core.stats.power import PAPER_N
 
 #: What each verdict means next to the paper, said under the claim.
 VERDICT_WORDS = {
@@ -27,6 +34,10 @@ VERDICT_WORDS = {
         "the Likert answers of this dataset are the output of a model of simulated "
         "participants (casa_core/study/likert.py), not ratings by people, so they cannot "
         "test what people believe: H4 is not reproduced here."
+    ),
+    TOO_FEW: (
+        "these data cannot decide it: a test it needs is computed only with more "
+        "participants than these (the checks below say which; stats.csv's note says why)."
     ),
 }
 
@@ -70,6 +81,27 @@ def facts(tables: Mapping[str, pd.DataFrame | None]) -> list[str]:
     if answered_by_model(likert):
         lines.append("Likert answers: model output (simulated participants), not people's.")
     return lines
+
+
+def design_note(trials: pd.DataFrame) -> str:
+    """A sentence when the dataset has fewer participants than the paper's study, else "".
+
+    Examples
+    --------
+    >>> print(design_note(pd.DataFrame({"participant": ["p1", "p2"]})).split(" (")[0])
+    Fewer participants than the paper's design: 2 here, 11 in the paper's study
+    >>> design_note(pd.DataFrame({"participant": [f"p{i}" for i in range(11)]}))
+    ''
+    """
+    n = trials["participant"].nunique() if "participant" in trials.columns else 0
+    if n >= PAPER_N:
+        return ""
+    return (
+        f"Fewer participants than the paper's design: {n} here, {PAPER_N} in the paper's "
+        "study (Sec. V-A). A test that needs more participants is not computed, and a "
+        'hypothesis that needs one reads "not testable: too few participants"; the tests '
+        "that are computed have less power than the paper's."
+    )
 
 
 def form_lines(claims: pd.DataFrame, stats: pd.DataFrame | None = None) -> list[str]:
@@ -227,6 +259,8 @@ def results_markdown(
     require_columns(claims, CLAIM_COLUMNS, "claims table")
     lines = [f"# Claims of the paper on dataset {dataset}", ""]
     lines += [f"{provenance}.", ""] if provenance else []
+    few = design_note(tables["trials"])
+    lines += [few, ""] if few else []
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
     note = modelling_note(tables["trials"], operator=operator, population=population, setup=setup)
     lines += [note, ""] if note else []
@@ -254,7 +288,9 @@ def results_markdown(
             "",
             f"Measured: {row.measured}.",
             "",
-            f"Verdict: {row.verdict}, {VERDICT_WORDS.get(row.verdict, '')}".rstrip(", "),
+            f"Verdict: {row.verdict}, {VERDICT_WORDS.get(verdict_kind(row.verdict), '')}".rstrip(
+                ", "
+            ),
         ]
         details = [] if pd.isna(row.details) else str(row.details).splitlines()
         details = [d for d in details if d]
