@@ -292,6 +292,8 @@ def results_markdown(
                 ", "
             ),
         ]
+        cause = getattr(row, "cause", "")
+        lines += ["", str(cause)] if isinstance(cause, str) and cause else []
         details = [] if pd.isna(row.details) else str(row.details).splitlines()
         details = [d for d in details if d]
         if details:
