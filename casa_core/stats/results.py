@@ -173,7 +173,10 @@ def modelling_note(
 ) -> str:
     """For a simulated dataset: its modelling choices and where the other choices are judged.
 
-    ``setup`` names the layout and teleoperation it was simulated on, first.
+    ``setup`` names the layout and teleoperation it was simulated on, first. The
+    robustness table judges the simulated study this config builds, which alone is
+    given an ``operator`` (the workflow's); another dataset of simulated participants
+    (say, logs copied from it) is told the table is not about it.
 
     Examples
     --------
@@ -191,8 +194,13 @@ def modelling_note(
         f"preset {', '.join(_values(trials, 'preset')) or 'not recorded'}",
         f"evidence {', '.join(_values(trials, 'evidence')) or 'not recorded'}",
     ]
-    if operator:
-        choices.append(f"operator model {operator}")
+    if not operator:
+        return (
+            f"Modelling choices in its trials: {', '.join(choices)}. This dataset is not the "
+            "simulated study the config builds: data/processed/robustness/results.md judges "
+            "the simulated study under other modelling choices, not this dataset."
+        )
+    choices.append(f"operator model {operator}")
     if population:
         choices.append(f"operator population {population}")
     return f"Modelling choices (the config's defaults): {', '.join(choices)}. {ROBUSTNESS_NOTE}"
@@ -207,6 +215,7 @@ def results_markdown(
     population: str | None = None,
     setup: str | None = None,
     provenance: str = "",
+    left_out: str = "",
 ) -> str:
     """The Markdown of ``results.md`` from :func:`casa_core.stats.claims.evaluate_claims`.
 
@@ -231,6 +240,9 @@ def results_markdown(
     provenance : str, optional
         The configuration that built it (:meth:`casa_core.config.Provenance.line`),
         written under the title.
+    left_out : str, optional
+        What the build left out (:func:`casa_core.stats.descriptives.left_out`), said
+        near the top.
 
     Returns
     -------
@@ -261,6 +273,7 @@ def results_markdown(
     lines += [f"{provenance}.", ""] if provenance else []
     few = design_note(tables["trials"])
     lines += [few, ""] if few else []
+    lines += [left_out, ""] if left_out else []
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
     note = modelling_note(tables["trials"], operator=operator, population=population, setup=setup)
     lines += [note, ""] if note else []
