@@ -110,6 +110,19 @@ def no_error_variance(cells, dv, factors, subject) -> bool:
     return bool((residual**2).sum() <= 1e-12 * total)
 
 
+def participants_needed(frame, factors) -> int:
+    """The fewest participants with every condition a repeated-measures ANOVA is computed
+    with: 2, and more than every term's degrees of freedom (:func:`require_more_participants`).
+
+    >>> participants_needed(pd.DataFrame({"method": ["NA", "PBA", "CASA"]}), ["method"])
+    3
+    """
+    dfs = [len(levels(frame[factor])) - 1 for factor in factors]
+    if len(factors) == 2:
+        dfs.append(dfs[0] * dfs[1])
+    return max(2, *(df + 1 for df in dfs))
+
+
 def require_more_participants(frame, factors, terms, n: int) -> None:
     """Raise :class:`Skipped` unless ``n`` exceeds every term's degrees of freedom.
 

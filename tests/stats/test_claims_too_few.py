@@ -46,11 +46,16 @@ def test_the_participants_needed_are_the_fewest_the_test_is_computed_with(two):
     assert np.isfinite(_rm_anova_p(_tables(3)["stats"], "H1"))
 
 
-def test_a_one_participant_note_names_two():
-    # Every within-subjects analysis needs at least 2 participants (its own note says so).
-    stats = _tables(1)["stats"]
-    rows = stats[(stats["hypothesis"] == "H3") & (stats["analysis"] == "rm_anova")]
-    assert participants_shortfall(rows["note"].iloc[0]) == (1, 2)
+def test_a_one_participant_note_names_what_the_test_needs():
+    # One participant: H3's 2 conditions need 2, H1's 3 conditions need 3 (as with 2
+    # participants above), so the verdict names the number that computes the test.
+    one = _tables(1)
+    stats = one["stats"]
+    for hypothesis, needed in (("H3", 2), ("H1", 3)):
+        rows = stats[(stats["hypothesis"] == hypothesis) & (stats["analysis"] == "rm_anova")]
+        assert participants_shortfall(rows["note"].iloc[0]) == (1, needed)
+    judged = claims.evaluate_claims(one, epsilon=EPSILON).set_index("claim")
+    assert judged.loc["H1", "verdict"] == "not testable: too few participants (1, needs 3)"
 
 
 def test_h1_and_h2_with_two_participants_are_not_testable_h3_is_judged(two):
