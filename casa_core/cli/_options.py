@@ -283,3 +283,30 @@ def provenance(args):
     if not args.config_files or not args.effective_config:
         raise ValueError("--config-files and --effective-config go together: give both")
     return Provenance.of(args.config_files, args.effective_config)
+
+
+def validation_option(command) -> None:
+    """``--validation``: the dataset's validation.csv, for what the build left out."""
+    command.add_argument(
+        "--validation",
+        metavar="CSV",
+        help="the dataset's validation.csv: the page says how many trials it left out "
+        "(allow_invalid=true) and names this file for the list (optional)",
+    )
+
+
+def left_out(args) -> str:
+    """The sentence on what the build left out (:func:`casa_core.stats.descriptives.left_out`),
+    from ``--validation``; "" without it.
+
+    Raises
+    ------
+    ValueError, OSError
+        If the file cannot be read or lacks a column.
+    """
+    from casa_core.io import read_table
+    from casa_core.stats.descriptives import left_out as sentence
+
+    if not args.validation:
+        return ""
+    return sentence(read_table(args.validation), args.validation)

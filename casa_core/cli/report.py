@@ -11,7 +11,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from casa_core.cli._errors import fail
-from casa_core.cli._options import example, positive_float, provenance, provenance_options
+from casa_core.cli._options import (
+    example,
+    left_out,
+    positive_float,
+    provenance,
+    provenance_options,
+    validation_option,
+)
 from casa_core.defaults import EPSILON
 from casa_core.io import read_table
 
@@ -101,6 +108,7 @@ def register(commands) -> None:
     )
     summary.add_argument("--stats", required=True, metavar="CSV", help="stats.csv")
     summary.add_argument("--dataset", required=True, help="the dataset's name, for the title")
+    validation_option(summary)
     summary.add_argument("--out-md", required=True, metavar="MD", help="summary.md to write")
     summary.add_argument("--out-html", required=True, metavar="HTML", help="its HTML page")
     summary.set_defaults(func=_summary)
@@ -122,6 +130,7 @@ def register(commands) -> None:
         "--setup",
         help="the layout and teleoperation it was simulated on, named for a simulated dataset",
     )
+    validation_option(results)
     results.add_argument("--out", required=True, metavar="MD", help="results.md to write")
     results.add_argument("--out-html", metavar="HTML", help="its HTML page (optional)")
     provenance_options(results)
@@ -184,7 +193,9 @@ def _summary(args) -> int:
     from casa_core.stats.summary import summary_markdown
 
     try:
-        text = summary_markdown(read_table(args.stats), dataset=args.dataset)
+        text = summary_markdown(
+            read_table(args.stats), dataset=args.dataset, left_out=left_out(args)
+        )
     except (OSError, ValueError) as error:
         return fail("report", error)
     atomic_write_text(args.out_md, text)
@@ -214,6 +225,7 @@ def _results(args) -> int:
             population=args.population,
             setup=args.setup,
             provenance=built.line() if built else "",
+            left_out=left_out(args),
         )
     except (OSError, ValueError) as error:
         return fail("report", error)

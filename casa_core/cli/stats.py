@@ -7,7 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from casa_core.cli._errors import cannot_write
-from casa_core.cli._options import example, one_sided_level
+from casa_core.cli._options import example, left_out, one_sided_level, validation_option
 from casa_core.cli._workflow import add_config_option, load_workflow_config
 from casa_core.io import read_table
 
@@ -31,6 +31,7 @@ def register(commands) -> None:
     )
     command.add_argument("--trials", required=True, metavar="CSV", help="trials.csv")
     command.add_argument("--likert", metavar="CSV", help="likert.csv (optional)")
+    validation_option(command)
     command.add_argument("--out-csv", required=True, metavar="CSV", help="stats.csv to write")
     command.add_argument("--out-md", required=True, metavar="MD", help="report to write")
     command.add_argument(
@@ -92,7 +93,7 @@ def _stats(args) -> int:
         trials = read_table(args.trials)
         likert = read_table(args.likert) if args.likert else None
         table = stats.analyze_study(trials, likert, margins=margins)
-        report = stats.report_markdown(table, trials=trials)
+        report = stats.report_markdown(table, trials=trials, left_out=left_out(args))
         wide = wide_means(trials) if args.out_wide else None
     except (OSError, ValueError) as error:
         print(f"casa stats: {error}", file=sys.stderr)

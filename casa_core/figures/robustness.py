@@ -16,7 +16,7 @@ from matplotlib.patches import Patch, Rectangle
 from casa_core.config import DEFAULT_VARIANT
 from casa_core.figures import style
 from casa_core.io import tables
-from casa_core.stats.claims import MODEL_OUTPUT, VERDICTS
+from casa_core.stats.claims import MODEL_OUTPUT, TOO_FEW, VERDICTS, verdict_kind
 
 #: Verdict -> cell colour (Okabe-Ito: green holds, yellow partly, vermillion differs;
 #: greys where the data cannot decide).
@@ -26,6 +26,7 @@ VERDICT_COLOURS: dict[str, str] = {
     "differs": "#D55E00",
     "not testable": "#DDDDDD",
     MODEL_OUTPUT: "#BBBBBB",
+    TOO_FEW: "#EEEEEE",
 }
 COLUMNS = ["claim", "variant", "verdict", "value"]
 
@@ -33,7 +34,9 @@ COLUMNS = ["claim", "variant", "verdict", "value"]
 def verdict_grid(claims: pd.DataFrame) -> tuple[list[str], list[str], np.ndarray, np.ndarray]:
     """Claims, variants, and per cell the verdict's index in :data:`VERDICTS` and the value.
 
-    A cell with no row is -1 (drawn blank). An unknown verdict is an error naming it.
+    A cell with no row is -1 (drawn blank). A verdict with its numbers (``not testable:
+    too few participants (2, needs 3)``) is its kind (:func:`verdict_kind`); an unknown
+    verdict is an error naming it.
 
     Examples
     --------
@@ -44,12 +47,11 @@ def verdict_grid(claims: pd.DataFrame) -> tuple[list[str], list[str], np.ndarray
     (['C1', 'H1'], ['default', 'x'], [[0, 2], [-1, 1]])
     """
     tables.require_columns(claims, COLUMNS, "robustness claims table")
-    unknown = sorted(set(claims["verdict"]) - set(VERDICTS))
-    if unknown:
-        raise ValueError(
-            f"robustness claims table: unknown verdict {unknown[0]!r}; "
-            f"expected one of {', '.join(VERDICTS)}"
-        )
+    for verdict in sorted(set(claims["verdict"])):
+        try:
+            verdict_kind(verdict)
+        except ValueError as error:
+            raise ValueError(f"robustness claims table: {error}") from None
     frame = tables.numeric_columns(claims[COLUMNS], ["value"], "robustness claims table")
     rows = list(dict.fromkeys(frame["claim"]))
     cols = list(dict.fromkeys(frame["variant"]))
@@ -57,7 +59,7 @@ def verdict_grid(claims: pd.DataFrame) -> tuple[list[str], list[str], np.ndarray
     values = np.full((len(rows), len(cols)), np.nan)
     for row in frame.itertuples():
         i, j = rows.index(row.claim), cols.index(row.variant)
-        verdicts[i, j] = VERDICTS.index(row.verdict)
+        verdicts[i, j] = VERDICTS.index(verdict_kind(row.verdict))
         values[i, j] = row.value
     return rows, cols, verdicts, values
 

@@ -16,7 +16,9 @@ Nothing here knows about robots or files; condition names come from
 - :mod:`~casa_core.stats.wide`: the participants' cell means, one row each (``wide.csv``);
 - :mod:`~casa_core.stats.apa`: APA-style text (``stats.md``);
 - :mod:`~casa_core.stats.summary`: the results at a glance (``summary.md``);
-- :mod:`~casa_core.stats.claims`: each claim of the paper judged on a dataset's tables;
+- :mod:`~casa_core.stats.claims`: each claim of the paper judged on a dataset's tables
+  (its verdicts: :mod:`~casa_core.stats.verdicts`; why one is not holds:
+  :mod:`~casa_core.stats.causes`);
 - :mod:`~casa_core.stats.results`: those verdicts as ``results.md``;
 - :mod:`~casa_core.stats.robustness`: the claims under each modelling variant;
 - :mod:`~casa_core.stats.power`: each replicate's detections and the power table.

@@ -20,9 +20,10 @@ import pandas as pd
 from casa_core.defaults import SIGNIFICANCE
 from casa_core.io.tables import numeric_column, require_columns
 from casa_core.stats._rows import noninferiority_level
+from casa_core.stats._tables import participants_shortfall
 from casa_core.stats.apa import p_value
 from casa_core.stats.margins import PAPER_ALPHA
-from casa_core.stats.study import POOLED, _conditions, _prepare_trials
+from casa_core.stats.study import POOLED, _prepare_trials
 from casa_core.vocabulary import (
     CASA_AFTER_LEARNING,
     CASA_BEFORE_LEARNING,
@@ -57,7 +58,9 @@ class Check:
     paper's direction (``"CASA after learning below NA (...)"``), for the hypothesis'
     criterion; ``reason`` is why it did not pass, in short and without numbers
     (``"significant, but in the opposite direction"``; empty when it passed), and the
-    text ends with the outcome and the same reason with its numbers.
+    text ends with the outcome and the same reason with its numbers. ``shortfall`` is
+    ``(got, needed)`` participants when it is undecided because a test it needs was not
+    computed for too few participants (the skip note of stats.csv), else None.
     """
 
     passed: bool | None
@@ -66,18 +69,21 @@ class Check:
     form: str = ""
     requirement: str = ""
     reason: str = ""
+    shortfall: tuple[int, int] | None = None
 
 
 class Part(NamedTuple):
     """One condition of a check: met (None: undecided), its numbers, why it is not met.
 
-    ``reason`` is the short reason (no numbers), ``why`` the same with its numbers.
+    ``reason`` is the short reason (no numbers), ``why`` the same with its numbers;
+    ``shortfall`` as :attr:`Check.shortfall`.
     """
 
     passed: bool | None
     text: str
     reason: str = ""
     why: str = ""
+    shortfall: tuple[int, int] | None = None
 
 
 def _outcome(passed: bool | None, why: str = "") -> str:
@@ -109,8 +115,24 @@ def _rows(stats, hypothesis, task, metric, analysis, **where) -> pd.DataFrame:
     return stats[chosen]
 
 
+#: The reason of a check undecided because a test needs more participants.
+TOO_FEW = "too few participants"
+
+
+def _shortfall(rows: pd.DataFrame) -> tuple[int, int] | None:
+    """``(got, needed)`` participants of a skipped test, from its note in stats.csv."""
+    if rows.empty or "note" not in rows.columns:
+        return None
+    return participants_shortfall(rows["note"].iloc[0])
+
+
 def _significant(rows: pd.DataFrame, name: str) -> Part:
     if rows.empty or not np.isfinite(rows["p"].iloc[0]):
+        shortfall = _shortfall(rows)
+        if shortfall is not None:
+            got, needed = shortfall
+            text = f"{name} not computed ({got} participants, needs {needed})"
+            return Part(None, text, TOO_FEW, text, shortfall)
         return Part(None, f"{name} not computed", "test not computed", f"{name} not computed")
     p = float(rows["p"].iloc[0])
     why = f"not significant ({name} {p_value(p)})"
@@ -150,15 +172,28 @@ def _in_direction(tests: list[Part], direction: Part) -> list[Part]:
     return [*tests, direction]
 
 
+def _sentence(reasons) -> str:
+    """Reasons as one clause, each said once: ``not significant, and no difference``.
+
+    >>> _sentence(["not significant", "not significant, and no difference"])
+    'not significant, and no difference'
+    >>> _sentence(["not significant", "no difference", "in the opposite direction"])
+    'not significant, no difference, and in the opposite direction'
+    """
+    said = list(dict.fromkeys(a for reason in reasons for a in reason.split(", and ") if a))
+    return ", and ".join(said) if len(said) < 3 else f"{', '.join(said[:-1])}, and {said[-1]}"
+
+
 def _combine(form: str, metric: str, parts: list[Part], requirement: str = "") -> Check:
     outcomes = [part.passed for part in parts]
     # A failed part decides; an undecided one leaves the check undecided otherwise.
     passed = False if False in outcomes else None if None in outcomes else True
     deciding = [part for part in parts if part.passed is passed] if passed is not True else []
-    reason = ", and ".join(dict.fromkeys(part.reason for part in deciding))
+    reason = _sentence(part.reason for part in deciding)
     why = ", and ".join(part.why for part in deciding)
     text = f"{metric} ({form}): {', '.join(part.text for part in parts)}: {_outcome(passed, why)}"
-    return Check(passed, text, metric, form, requirement, reason)
+    shortfalls = [part.shortfall for part in deciding if part.shortfall]
+    return Check(passed, text, metric, form, requirement, reason, min(shortfalls, default=None))
 
 
 def _where(task: str) -> str:
@@ -286,8 +321,10 @@ def noninferiority(stats, *, hypothesis, task, metric, new, reference) -> list[C
             checks.append(Check(False, text, **keys, reason=why))
             continue
         if row.empty or not np.isfinite(row["ci_high"].iloc[0]):
-            text = f"{name}: bound not computed: {_outcome(None, 'bound not computed')}"
-            checks.append(Check(None, text, **keys, reason="bound not computed"))
+            shortfall = _shortfall(row)
+            reason = "bound not computed" if shortfall is None else TOO_FEW
+            text = f"{name}: bound not computed: {_outcome(None, reason)}"
+            checks.append(Check(None, text, **keys, reason=reason, shortfall=shortfall))
             continue
         bound = float(row["ci_high"].iloc[0])
         flag = _noninferior_flag(row["noninferior"].iloc[0])
@@ -359,53 +396,3 @@ def h3_checks(stats: pd.DataFrame, trials: pd.DataFrame) -> list[Check]:
             stats, means, **key, better=CASA_AFTER_LEARNING, worse="NA", task_means=per_task
         )
     return checks
-
-
-def likert_checks(stats: pd.DataFrame, likert: pd.DataFrame) -> list[Check]:
-    """H4: per misspecified task and question, CASA after learning rated above the rest."""
-    stats = _text(stats)
-    frame = _conditions(likert, "likert table")
-    frame["score"] = numeric_column(frame, "score", "likert table")
-    checks = []
-    for task in UNKNOWN_TASKS:
-        for question in sorted(frame.loc[frame["task"] == task, "question"].unique()):
-            part = frame[(frame["task"] == task) & (frame["question"] == question)]
-            means = part.groupby("method", observed=True)["score"].mean()
-            name = f"{task} {question}"
-            if CASA_AFTER_LEARNING not in means.index or len(means) < 2:
-                text = f"{name}: too few conditions: {_outcome(None, 'too few conditions')}"
-                checks.append(Check(None, text, reason="too few conditions"))
-            else:
-                others = means.drop(CASA_AFTER_LEARNING)
-                best = bool(means[CASA_AFTER_LEARNING] > others.max())
-                text = f"mean {means[CASA_AFTER_LEARNING]:.2f} vs at most {others.max():.2f}"
-                why = f"not rated highest ({others.idxmax()} {others.max():.2f})"
-                reason = "" if best else "not rated highest"
-                outcome = _outcome(best, why)
-                checks.append(Check(best, f"{name} (paper): {text}: {outcome}", reason=reason))
-            checks.append(_likert_within(stats, task, question, name))
-    return checks
-
-
-def _likert_within(stats, task, question, name) -> Check:
-    parts = [_significant(_rows(stats, "H4", task, question, "friedman"), "Friedman")]
-    wilcoxon = _rows(stats, "H4", task, question, "wilcoxon")
-    wilcoxon = wilcoxon[wilcoxon["comparison"].str.startswith(f"{CASA_AFTER_LEARNING} vs ")]
-    if wilcoxon.empty:
-        parts.append(Part(None, "no Wilcoxon tests", "no Wilcoxon tests", "no Wilcoxon tests"))
-    for index, row in wilcoxon.iterrows():
-        other = row["comparison"].removeprefix(f"{CASA_AFTER_LEARNING} vs ")
-        test = _significant(wilcoxon.loc[[index]], f"vs {other}")
-        text = f"{test.text} (difference {row['estimate']:.3g})"
-        if not np.isfinite(row["estimate"]):
-            parts.append(Part(None, text, "no difference computed", f"vs {other} no difference"))
-        elif test.passed is not None and row["estimate"] <= 0:
-            # The paper's direction here: CASA after learning rated above the other.
-            found = OPPOSITE if row["estimate"] < 0 else "no difference"
-            reason = f"{'significant, but' if test.passed else 'not significant, and'} {found}"
-            side = "below" if row["estimate"] < 0 else "equal to"
-            why = f"vs {other} {reason} ({CASA_AFTER_LEARNING} {side} {other})"
-            parts.append(Part(False, text, reason, why))
-        else:
-            parts.append(test._replace(text=text))
-    return _combine("within", name, parts)

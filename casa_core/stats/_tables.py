@@ -11,6 +11,7 @@ Two kinds of trouble are kept apart on purpose:
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from typing import Any
 
@@ -109,6 +110,19 @@ def no_error_variance(cells, dv, factors, subject) -> bool:
     return bool((residual**2).sum() <= 1e-12 * total)
 
 
+def participants_needed(frame, factors) -> int:
+    """The fewest participants with every condition a repeated-measures ANOVA is computed
+    with: 2, and more than every term's degrees of freedom (:func:`require_more_participants`).
+
+    >>> participants_needed(pd.DataFrame({"method": ["NA", "PBA", "CASA"]}), ["method"])
+    3
+    """
+    dfs = [len(levels(frame[factor])) - 1 for factor in factors]
+    if len(factors) == 2:
+        dfs.append(dfs[0] * dfs[1])
+    return max(2, *(df + 1 for df in dfs))
+
+
 def require_more_participants(frame, factors, terms, n: int) -> None:
     """Raise :class:`Skipped` unless ``n`` exceeds every term's degrees of freedom.
 
@@ -125,6 +139,40 @@ def require_more_participants(frame, factors, terms, n: int) -> None:
                 f"needs more participants with every condition than the {df} degrees of "
                 f"freedom of {term!r} (sphericity), got {n}"
             )
+
+
+#: The skip notes that say a test needs more participants (:func:`require_more_participants`
+#: and the "needs at least M participants" of the other analyses), read back by
+#: :func:`participants_shortfall`.
+_MORE_THAN_DF = re.compile(
+    r"needs more participants with every condition than the (\d+) degrees of freedom of "
+    r"'[^']*' \(sphericity\), got (\d+)"
+)
+_AT_LEAST = re.compile(r"needs at least (\d+) participants[^,;]*, got (\d+)")
+
+
+def participants_shortfall(note: str) -> tuple[int, int] | None:
+    """``(got, needed)`` when a skip ``note`` says the test needs more participants, else None.
+
+    ``needed`` is the fewest participants the analysis computes the test with: one more
+    than a term's degrees of freedom (:func:`require_more_participants`), or the number a
+    "needs at least" note names.
+
+    Examples
+    --------
+    >>> participants_shortfall("needs more participants with every condition than the 2 "
+    ...     "degrees of freedom of 'method' (sphericity), got 2; relative effort is 1")
+    (2, 3)
+    >>> participants_shortfall("needs at least 2 participants with both conditions, got 1")
+    (1, 2)
+    >>> participants_shortfall("zero variance") is None
+    True
+    """
+    found = _MORE_THAN_DF.search(str(note))
+    if found:
+        return int(found[2]), int(found[1]) + 1
+    found = _AT_LEAST.search(str(note))
+    return (int(found[2]), int(found[1])) if found else None
 
 
 def as_list(factors: str | Sequence[str]) -> list[str]:

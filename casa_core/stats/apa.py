@@ -261,7 +261,9 @@ def interaction_lines(rows: pd.DataFrame) -> list[str]:
     ]
 
 
-def report_markdown(table: pd.DataFrame, *, trials: pd.DataFrame | None = None) -> str:
+def report_markdown(
+    table: pd.DataFrame, *, trials: pd.DataFrame | None = None, left_out: str = ""
+) -> str:
     """An APA-style Markdown report of the stats table from :func:`analyze_study`.
 
     One section per hypothesis (:data:`TITLES`), one table row per test, e.g.
@@ -275,6 +277,9 @@ def report_markdown(table: pd.DataFrame, *, trials: pd.DataFrame | None = None) 
         The trials table the statistics were computed from: the report then opens with
         the data's source, the number of participants and the mean ± SD of every metric
         per task and condition (:func:`casa_core.stats.descriptives.data_lines`).
+    left_out : str, optional
+        What the build left out (:func:`casa_core.stats.descriptives.left_out`), said
+        under the title.
 
     Returns
     -------
@@ -299,6 +304,7 @@ def report_markdown(table: pd.DataFrame, *, trials: pd.DataFrame | None = None) 
     # stats.csv read back with pandas turns empty text into NaN.
     table = table.fillna({"note": "", "comparison": "", "term": ""})
     lines = ["# CASA user study: statistics", ""]
+    lines += [left_out, ""] if left_out else []
     if trials is not None:
         lines += data_lines(trials)
     lines.append(_INTRODUCTION)

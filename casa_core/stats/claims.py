@@ -19,18 +19,23 @@ import pandas as pd
 from casa_core.io.contract import CONDITION_KEYS
 from casa_core.io.tables import numeric_columns, require_columns
 from casa_core.stats import _claim_tests as tests
+from casa_core.stats import causes
+from casa_core.stats._hypotheses import judge_checks
+from casa_core.stats._likert_checks import likert_checks
 from casa_core.stats.study import answered_by_model
+from casa_core.stats.verdicts import (
+    HOLDS_SHARE,
+    MODEL_OUTPUT,
+    PARTLY_SHARE,
+    TOO_FEW,
+    VERDICTS,
+    share_verdict,
+    too_few,
+    verdict_kind,
+)
 from casa_core.vocabulary import KNOWN_TASK, LEARNED_NAMES, UNKNOWN_TASKS
 
 CLAIM_COLUMNS = ["claim", "statement", "criterion", "measured", "value", "verdict", "details"]
-#: H4's verdict when the Likert answers are a model's output, whatever they show.
-MODEL_OUTPUT = "not testable: model output"
-VERDICTS = ("holds", "partly", "differs", "not testable", MODEL_OUTPUT)
-#: A claim about every participant holds when it is seen in at least 90% of the trials:
-#: one trial in 11 (the paper's participants) may miss it, two may not.
-HOLDS_SHARE = 0.9
-#: ... and partly when it is seen in at least half of them; below that it differs.
-PARTLY_SHARE = 0.5
 #: The user keeps control while alpha (the user's share) stays at or above 0.95: the paper
 #: says no confidence warranted "an arbitration alpha below 1"; 0.05 leaves room for an
 #: inference step at the threshold, far below any assistance a person would feel.
@@ -65,12 +70,7 @@ STATEMENTS = {
 }
 
 
-def _share_verdict(hits: int, total: int) -> str:
-    share = hits / total
-    return "holds" if share >= HOLDS_SHARE else "partly" if share >= PARTLY_SHARE else "differs"
-
-
-def _row(claim, criterion, measured, value, verdict, details="") -> dict:
+def _row(claim, criterion, measured, value, verdict, details="", cause="") -> dict:
     return dict(
         claim=claim,
         statement=STATEMENTS[claim],
@@ -79,12 +79,20 @@ def _row(claim, criterion, measured, value, verdict, details="") -> dict:
         value=value,
         verdict=verdict,
         details=details,
+        cause=cause if verdict != "holds" else "",
     )
 
 
 def _range(values) -> str:
     values = np.asarray(values, dtype=float)
     return f"median {np.median(values):.3g}, range {values.min():.3g} to {values.max():.3g}"
+
+
+def _steps(steps: pd.DataFrame) -> pd.DataFrame:
+    """``steps.csv`` checked, its numbers as numbers and a ``trial`` column."""
+    require_columns(steps, [*CONDITION_KEYS, "t", "alpha", "intent", "beta"], "steps table")
+    frame = numeric_columns(steps, ["t", "alpha", "beta"], "steps table")
+    return frame.assign(trial=causes.trial_key(frame))
 
 
 def trial_outcomes(steps: pd.DataFrame) -> pd.DataFrame:
@@ -112,10 +120,7 @@ def trial_outcomes(steps: pd.DataFrame) -> pd.DataFrame:
        min_alpha    top  top_beta  beta:purple
     0        0.4  green       2.5          0.3
     """
-    require_columns(steps, [*CONDITION_KEYS, "t", "alpha", "intent", "beta"], "steps table")
-    frame = numeric_columns(steps, ["t", "alpha", "beta"], "steps table")
-    if "trial" not in frame.columns:
-        frame["trial"] = frame[list(CONDITION_KEYS)].astype(str).agg("/".join, axis=1)
+    frame = _steps(steps)
     rows = []
     for trial, part in frame.groupby("trial", sort=True):
         last = part[part["t"] == part["t"].max()].dropna(subset=["beta"])
@@ -151,7 +156,11 @@ def _assisting(outcomes, target_of, *, epsilon: float, claim: str, what: str) ->
         f"{_range(np.nan_to_num(target_beta))}; lowest alpha {_range(outcomes['min_alpha'])}"
     )
     share = float(hits.mean())
-    return _row(claim, criterion, measured, share, _share_verdict(int(hits.sum()), len(hits)))
+    cause = causes.assisting_cause(
+        outcomes[~hits], targets[~hits], epsilon=epsilon, taken=ALPHA_TAKEN
+    )
+    verdict = share_verdict(int(hits.sum()), len(hits))
+    return _row(claim, criterion, measured, share, verdict, cause=cause)
 
 
 def _of(outcomes, method, phases, tasks) -> pd.DataFrame:
@@ -173,8 +182,9 @@ def _claim_c4(outcomes: pd.DataFrame, *, epsilon: float) -> dict:
     )
 
 
-def _claim_c2(outcomes: pd.DataFrame) -> dict:
-    """C2 from :func:`trial_outcomes`: before learning CASA leaves control, PBA takes it."""
+def _claim_c2(outcomes: pd.DataFrame, steps: pd.DataFrame, *, epsilon: float) -> dict:
+    """C2 from :func:`trial_outcomes`: before learning CASA leaves control, PBA takes it;
+    ``steps`` (with a ``trial`` column) gives the cause where it does not."""
     criterion = (
         f"holds: for >= {HOLDS_SHARE:.0%} of participant-tasks (Unknown Goal, Unknown "
         f"Skill) alpha stays >= {ALPHA_IN_CONTROL} in the CASA trial before learning and "
@@ -202,7 +212,14 @@ def _claim_c2(outcomes: pd.DataFrame) -> dict:
         f"{int(kept.sum())} (lowest alpha {_range(pairs['casa'])}); PBA took it below "
         f"{ALPHA_TAKEN} in {int(taken.sum())} (lowest alpha {_range(pairs['pba'])})"
     )
-    return _row("C2", criterion, measured, both / len(pairs), _share_verdict(both, len(pairs)))
+    judged = casa.set_index(keys).index.isin(pairs.index)
+    lost = casa[judged & (casa["min_alpha"] < ALPHA_IN_CONTROL).to_numpy()]
+    thresholds = (ALPHA_IN_CONTROL, ALPHA_TAKEN)
+    cause = causes.c2_cause(
+        steps, lost, int((~taken).sum()), epsilon=epsilon, thresholds=thresholds
+    )
+    verdict = share_verdict(both, len(pairs))
+    return _row("C2", criterion, measured, both / len(pairs), verdict, cause=cause)
 
 
 def _claim_c3(arbitration: pd.DataFrame | None, *, epsilon: float) -> dict:
@@ -226,83 +243,41 @@ def _claim_c3(arbitration: pd.DataFrame | None, *, epsilon: float) -> dict:
     lowest_belief = float(frame["alpha_belief"].min())
     highest_beta = float(frame["beta"].max())
     lowest_confidence = float(frame["alpha_confidence"].min())
-    met = [
-        lowest_belief < ALPHA_TAKEN,
-        highest_beta <= epsilon,
-        lowest_confidence >= ALPHA_IN_CONTROL,
-    ]
+    met = {
+        "belief": lowest_belief < ALPHA_TAKEN,
+        "beta": highest_beta <= epsilon,
+        "confidence": lowest_confidence >= ALPHA_IN_CONTROL,
+    }
     top = frame.loc[frame["beta"].idxmax(), "intent"]
     measured = (
-        f"{sum(met)} of 3; lowest alpha under belief arbitration {lowest_belief:.3g}; "
-        f"highest beta_hat {highest_beta:.3g} ({top}); lowest alpha under confidence "
-        f"arbitration {lowest_confidence:.3g}"
+        f"{_met_words(met, epsilon)}; lowest alpha under belief arbitration "
+        f"{lowest_belief:.3g}; highest beta_hat {highest_beta:.3g} ({top}); lowest alpha "
+        f"under confidence arbitration {lowest_confidence:.3g}"
     )
-    verdict = {3: "holds", 2: "partly"}.get(sum(met), "differs")
-    return _row("C3", criterion, measured, sum(met) / 3, verdict)
+    count = sum(met.values())
+    verdict = {3: "holds", 2: "partly"}.get(count, "differs")
+    cause = causes.c3_cause(frame, met, epsilon=epsilon)
+    return _row("C3", criterion, measured, count / 3, verdict, cause=cause)
 
 
-def _requirements(checks: list[tests.Check]) -> str:
-    """What the checks ask, each once, in the paper's direction (lower is better)."""
-    metrics = ", ".join(dict.fromkeys(check.metric for check in checks if check.metric))
-    asked = "; ".join(dict.fromkeys(check.requirement for check in checks if check.requirement))
-    if not asked:
-        return ""
-    # The hypotheses' "more accurate, efficient, and effortless": lower is better.
-    return (
-        f"on each of {metrics} (lower is better), in the paper's form and in the "
-        f"within-subjects form: {asked}. "
-    )
-
-
-def _not_passed(checks: list[tests.Check]) -> str:
-    """Why the checks that did not pass did not, counted by reason: ``failed: 2 ...``."""
-    said = []
-    for outcome, name in ((False, "failed"), (None, "undecided")):
-        reasons = [check.reason or "no reason given" for check in checks if check.passed is outcome]
-        counts = {reason: reasons.count(reason) for reason in dict.fromkeys(reasons)}
-        if counts:
-            said.append(f"{name}: " + "; ".join(f"{n} {reason}" for reason, n in counts.items()))
+def _met_words(met: Mapping[str, bool], epsilon: float) -> str:
+    """C3's conditions by name: ``1 of 3 met (belief arbitration's alpha below 0.5); ...``."""
+    words = {
+        "belief": f"belief arbitration's alpha below {ALPHA_TAKEN}",
+        "beta": f"every beta_hat <= epsilon = {epsilon:g}",
+        "confidence": f"confidence arbitration's alpha >= {ALPHA_IN_CONTROL}",
+    }
+    said = [f"{sum(met.values())} of 3 met"]
+    for outcome, name in ((True, "met"), (False, "not met")):
+        chosen = [words[key] for key, value in met.items() if value is outcome]
+        if chosen:
+            said.append(f"{name}: {' and '.join(chosen)}")
     return "; ".join(said)
 
 
-def _hypothesis(claim: str, checks: list[tests.Check]) -> dict:
-    """H1-H3: every check of both forms passes (holds), at least half do (partly)."""
-    criterion = (
-        f"{_requirements(checks)}holds: every check below testable and passed; partly: at least "
-        f"{PARTLY_SHARE:.0%} of the checks passed; differs: fewer"
-    )
-    details = "\n".join(check.text for check in checks)
-    share, verdict = _verdict(checks)
-    if verdict == "not testable":
-        measured = "no check could be decided" if checks else "no checks"
-    else:
-        testable = sum(check.passed is not None for check in checks)
-        passed = sum(bool(check.passed) for check in checks)
-        measured = f"{passed} of {len(checks)} checks passed ({testable} decided)"
-    why = _not_passed(checks)
-    measured += f"; {why}" if why else ""
-    row = _row(claim, criterion, measured, share, verdict, details)
-    forms = {form: [check for check in checks if check.form == form] for form in FORM_NAMES}
-    if all(forms.values()):
-        row["by_form"] = "; ".join(
-            f"{FORM_NAMES[form]}: {_verdict(mine)[1]}" for form, mine in forms.items()
-        )
-    return row
-
-
-#: The names of the two forms of the checks of H1-H3 (:data:`_claim_tests.FORMS`).
-FORM_NAMES = dict(zip(tests.FORMS, ("paper form", "within subjects"), strict=True))
-
-
-def _verdict(checks: list[tests.Check]) -> tuple[float, str]:
-    """The share of checks passed and the verdict: holds when all pass, partly when at
-    least :data:`PARTLY_SHARE` do, not testable when none is decided."""
-    if not any(check.passed is not None for check in checks):
-        return np.nan, "not testable"
-    share = sum(bool(check.passed) for check in checks) / len(checks)
-    if share == 1.0:
-        return share, "holds"
-    return share, "partly" if share >= PARTLY_SHARE else "differs"
+def _hypothesis(claim: str, checks: list[tests.Check], participants: int) -> dict:
+    """H1-H4's row from its checks (:func:`casa_core.stats._hypotheses.judge_checks`)."""
+    return {"claim": claim, "statement": STATEMENTS[claim]} | judge_checks(checks, participants)
 
 
 def _claim_h4(stats: pd.DataFrame, likert: pd.DataFrame | None) -> dict:
@@ -317,12 +292,12 @@ def _claim_h4(stats: pd.DataFrame, likert: pd.DataFrame | None) -> dict:
     )
     if likert is None or likert.empty:
         return _row("H4", criterion, "no Likert answers", np.nan, "not testable")
-    checks = tests.likert_checks(stats, likert)
-    row = _hypothesis("H4", checks)
+    checks = likert_checks(stats, likert)
+    row = _hypothesis("H4", checks, likert["participant"].nunique())
     row["criterion"] = criterion
     if answered_by_model(likert):
         row["measured"] = "answers are model output (simulated participants); " + row["measured"]
-        row["verdict"], row["value"] = MODEL_OUTPUT, np.nan
+        row["verdict"], row["value"], row["cause"] = MODEL_OUTPUT, np.nan, ""
     return row
 
 
@@ -343,9 +318,11 @@ def evaluate_claims(tables: Mapping[str, pd.DataFrame | None], *, epsilon: float
     Returns
     -------
     pandas.DataFrame
-        Columns :data:`CLAIM_COLUMNS` and ``by_form``, one row per claim C1-C4 (and
-        expert), H1-H4; ``by_form`` gives H1-H3's verdict on the checks of each form
-        alone (``paper form: differs; within subjects: partly``), empty for the others.
+        Columns :data:`CLAIM_COLUMNS`, ``by_form`` and ``cause``, one row per claim C1-C4
+        (and expert), H1-H4; ``by_form`` gives H1-H3's verdict on the checks of each form
+        alone (``paper form: differs; within subjects: partly``), empty for the others;
+        ``cause`` is a sentence on why a verdict other than holds came about, computed
+        from the tables, with a link to the docs (:mod:`casa_core.stats.causes`).
         ``value`` is the
         number behind the verdict (the share of trials or checks that meet the criterion;
         NaN when not testable); ``verdict`` is one of :data:`VERDICTS`
@@ -378,42 +355,49 @@ def evaluate_claims(tables: Mapping[str, pd.DataFrame | None], *, epsilon: float
     for name in ("trials", "steps", "stats"):
         if tables.get(name) is None:
             raise ValueError(f"evaluate_claims: the {name!r} table is required")
-    outcomes = trial_outcomes(tables["steps"])
+    steps = _steps(tables["steps"])
     stats, trials = tables["stats"], tables["trials"]
+    assert stats is not None and trials is not None  # required, checked above
     likert = tables.get("likert")
     case_steps = tables.get("case_steps")
-    expert = trial_outcomes(case_steps) if case_steps is not None else None
+    runs = [("", steps)]
+    if case_steps is not None:
+        runs.append((" expert", _steps(case_steps)))
     observed = {
-        "C1": lambda trials: _claim_c1(trials, epsilon=epsilon),
-        "C2": _claim_c2,
+        "C1": lambda outcomes, _: _claim_c1(outcomes, epsilon=epsilon),
+        "C2": lambda outcomes, steps: _claim_c2(outcomes, steps, epsilon=epsilon),
         "C3": None,
-        "C4": lambda trials: _claim_c4(trials, epsilon=epsilon),
+        "C4": lambda outcomes, _: _claim_c4(outcomes, epsilon=epsilon),
     }
+    outcomes = {suffix: trial_outcomes(frame) for suffix, frame in runs}
     rows = []
     for claim, judge in observed.items():
         if judge is None:
             rows.append(_claim_c3(tables.get("arbitration"), epsilon=epsilon))
             continue
-        rows.append(judge(outcomes))
-        if expert is not None:
-            # The paper saw C1, C2 and C4 in its expert's runs: judged on the case study too.
-            rows.append(judge(expert) | {"claim": f"{claim} expert"})
+        # The paper saw C1, C2 and C4 in its expert's runs: judged on the case study too.
+        for suffix, frame in runs:
+            rows.append(judge(outcomes[suffix], frame) | {"claim": f"{claim}{suffix}"})
+    n = trials["participant"].nunique() if "participant" in trials.columns else 0
     rows += [
-        _hypothesis("H1", tests.h1_checks(stats, trials)),
-        _hypothesis("H2", tests.h2_checks(stats, trials)),
-        _hypothesis("H3", tests.h3_checks(stats, trials)),
+        _hypothesis("H1", tests.h1_checks(stats, trials), n),
+        _hypothesis("H2", tests.h2_checks(stats, trials), n),
+        _hypothesis("H3", tests.h3_checks(stats, trials), n),
         _claim_h4(stats, likert),
     ]
-    table = pd.DataFrame(rows, columns=[*CLAIM_COLUMNS, "by_form"])
-    table["by_form"] = table["by_form"].fillna("")
+    table = pd.DataFrame(rows, columns=[*CLAIM_COLUMNS, "by_form", "cause"])
+    table[["by_form", "cause"]] = table[["by_form", "cause"]].fillna("")
     return table
 
 
 __all__ = [
     "CLAIM_COLUMNS",
     "MODEL_OUTPUT",
+    "TOO_FEW",
     "VERDICTS",
     "answered_by_model",
     "evaluate_claims",
+    "too_few",
     "trial_outcomes",
+    "verdict_kind",
 ]

@@ -130,4 +130,39 @@ def data_lines(trials: pd.DataFrame) -> list[str]:
     return lines + [""]
 
 
-__all__ = ["DESCRIPTIVE_COLUMNS", "data_lines", "descriptives"]
+def left_out(validation: pd.DataFrame | None, where: str) -> str:
+    """A sentence on the trials a build left out (``allow_invalid``), else "".
+
+    ``validation`` is the dataset's validation table (``validation.csv``: one row per
+    problem, ``status`` ``excluded`` for a file or line left out), ``where`` the path
+    the sentence names for the list.
+
+    Examples
+    --------
+    >>> validation = pd.DataFrame({"file": ["p1/a.csv", "p1/a.csv", "p1/b.csv"],
+    ...     "kind": "trial", "status": ["excluded", "excluded", "ok"]})
+    >>> print(left_out(validation, "lab/validation.csv").replace("; ", ";\\n"))
+    Left out: 1 trial log that breaks the data contract, excluded with allow_invalid=true;
+    the list, with each problem, is in lab/validation.csv (status excluded).
+    >>> left_out(validation.assign(status="ok"), "validation.csv")
+    ''
+    """
+    if validation is None or validation.empty:
+        return ""
+    require_columns(validation, ["file", "kind", "status"], "validation table")
+    excluded = validation[validation["status"].astype(str) == "excluded"]
+    trials = excluded.loc[excluded["kind"].astype(str) == "trial", "file"].nunique()
+    surveys = int((excluded["kind"].astype(str) == "surveys").sum())
+    said = [f"{trials} trial log{'s' * (trials != 1)}"] if trials else []
+    if surveys:
+        said.append(f"the lines of {surveys} problem{'s' * (surveys != 1)} in surveys.csv")
+    if not said:
+        return ""
+    breaks = "break" if trials + surveys > 1 else "breaks"
+    return (
+        f"Left out: {' and '.join(said)} that {breaks} the data contract, excluded with "
+        f"allow_invalid=true; the list, with each problem, is in {where} (status excluded)."
+    )
+
+
+__all__ = ["DESCRIPTIVE_COLUMNS", "data_lines", "descriptives", "left_out"]

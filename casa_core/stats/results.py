@@ -15,7 +15,14 @@ import pandas as pd
 
 from casa_core.io.tables import require_columns
 from casa_core.stats import _claim_tests as tests
-from casa_core.stats.claims import CLAIM_COLUMNS, MODEL_OUTPUT, answered_by_model
+from casa_core.stats.claims import (
+    CLAIM_COLUMNS,
+    MODEL_OUTPUT,
+    TOO_FEW,
+    answered_by_model,
+    verdict_kind,
+)
+from casa_core.stats.power import PAPER_N
 
 #: What each verdict means next to the paper, said under the claim.
 VERDICT_WORDS = {
@@ -27,6 +34,10 @@ VERDICT_WORDS = {
         "the Likert answers of this dataset are the output of a model of simulated "
         "participants (casa_core/study/likert.py), not ratings by people, so they cannot "
         "test what people believe: H4 is not reproduced here."
+    ),
+    TOO_FEW: (
+        "these data cannot decide it: a test it needs is computed only with more "
+        "participants than these (the checks below say which; stats.csv's note says why)."
     ),
 }
 
@@ -70,6 +81,27 @@ def facts(tables: Mapping[str, pd.DataFrame | None]) -> list[str]:
     if answered_by_model(likert):
         lines.append("Likert answers: model output (simulated participants), not people's.")
     return lines
+
+
+def design_note(trials: pd.DataFrame) -> str:
+    """A sentence when the dataset has fewer participants than the paper's study, else "".
+
+    Examples
+    --------
+    >>> print(design_note(pd.DataFrame({"participant": ["p1", "p2"]})).split(" (")[0])
+    Fewer participants than the paper's design: 2 here, 11 in the paper's study
+    >>> design_note(pd.DataFrame({"participant": [f"p{i}" for i in range(11)]}))
+    ''
+    """
+    n = trials["participant"].nunique() if "participant" in trials.columns else 0
+    if n >= PAPER_N:
+        return ""
+    return (
+        f"Fewer participants than the paper's design: {n} here, {PAPER_N} in the paper's "
+        "study (Sec. V-A). A test that needs more participants is not computed, and a "
+        'hypothesis that needs one reads "not testable: too few participants"; the tests '
+        "that are computed have less power than the paper's."
+    )
 
 
 def form_lines(claims: pd.DataFrame, stats: pd.DataFrame | None = None) -> list[str]:
@@ -141,7 +173,10 @@ def modelling_note(
 ) -> str:
     """For a simulated dataset: its modelling choices and where the other choices are judged.
 
-    ``setup`` names the layout and teleoperation it was simulated on, first.
+    ``setup`` names the layout and teleoperation it was simulated on, first. The
+    robustness table judges the simulated study this config builds, which alone is
+    given an ``operator`` (the workflow's); another dataset of simulated participants
+    (say, logs copied from it) is told the table is not about it.
 
     Examples
     --------
@@ -159,8 +194,13 @@ def modelling_note(
         f"preset {', '.join(_values(trials, 'preset')) or 'not recorded'}",
         f"evidence {', '.join(_values(trials, 'evidence')) or 'not recorded'}",
     ]
-    if operator:
-        choices.append(f"operator model {operator}")
+    if not operator:
+        return (
+            f"Modelling choices in its trials: {', '.join(choices)}. This dataset is not the "
+            "simulated study the config builds: data/processed/robustness/results.md judges "
+            "the simulated study under other modelling choices, not this dataset."
+        )
+    choices.append(f"operator model {operator}")
     if population:
         choices.append(f"operator population {population}")
     return f"Modelling choices (the config's defaults): {', '.join(choices)}. {ROBUSTNESS_NOTE}"
@@ -175,6 +215,7 @@ def results_markdown(
     population: str | None = None,
     setup: str | None = None,
     provenance: str = "",
+    left_out: str = "",
 ) -> str:
     """The Markdown of ``results.md`` from :func:`casa_core.stats.claims.evaluate_claims`.
 
@@ -199,6 +240,9 @@ def results_markdown(
     provenance : str, optional
         The configuration that built it (:meth:`casa_core.config.Provenance.line`),
         written under the title.
+    left_out : str, optional
+        What the build left out (:func:`casa_core.stats.descriptives.left_out`), said
+        near the top.
 
     Returns
     -------
@@ -227,6 +271,9 @@ def results_markdown(
     require_columns(claims, CLAIM_COLUMNS, "claims table")
     lines = [f"# Claims of the paper on dataset {dataset}", ""]
     lines += [f"{provenance}.", ""] if provenance else []
+    few = design_note(tables["trials"])
+    lines += [few, ""] if few else []
+    lines += [left_out, ""] if left_out else []
     lines += [f"Dataset: `{dataset}`. " + " ".join(facts(tables)), ""]
     note = modelling_note(tables["trials"], operator=operator, population=population, setup=setup)
     lines += [note, ""] if note else []
@@ -254,8 +301,12 @@ def results_markdown(
             "",
             f"Measured: {row.measured}.",
             "",
-            f"Verdict: {row.verdict}, {VERDICT_WORDS.get(row.verdict, '')}".rstrip(", "),
+            f"Verdict: {row.verdict}, {VERDICT_WORDS.get(verdict_kind(row.verdict), '')}".rstrip(
+                ", "
+            ),
         ]
+        cause = getattr(row, "cause", "")
+        lines += ["", str(cause)] if isinstance(cause, str) and cause else []
         details = [] if pd.isna(row.details) else str(row.details).splitlines()
         details = [d for d in details if d]
         if details:

@@ -112,7 +112,7 @@ def summary_table(stats: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
 
 
-def summary_markdown(stats: pd.DataFrame, *, dataset: str) -> str:
+def summary_markdown(stats: pd.DataFrame, *, dataset: str, left_out: str = "") -> str:
     """The summary of one dataset's statistics as Markdown: one table per hypothesis.
 
     Parameters
@@ -121,6 +121,9 @@ def summary_markdown(stats: pd.DataFrame, *, dataset: str) -> str:
         The dataset's stats table.
     dataset : str
         The dataset's name, for the title.
+    left_out : str, optional
+        What the build left out (:func:`casa_core.stats.descriptives.left_out`), said
+        under the title.
 
     Returns
     -------
@@ -151,6 +154,7 @@ def summary_markdown(stats: pd.DataFrame, *, dataset: str) -> str:
     lines = [
         f"# Results of dataset {dataset}",
         "",
+        *([left_out, ""] if left_out else []),
         "Per hypothesis and measure, the omnibus test of the method in the paper's form "
         "(each participant-condition an independent observation) and in the "
         "within-subjects form; every test, with the pairwise comparisons and "

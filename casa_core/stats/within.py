@@ -30,6 +30,7 @@ from casa_core.stats._tables import (
     equal_to_rounding,
     levels,
     no_error_variance,
+    participants_needed,
     require_more_participants,
     require_representable,
     skipped_row,
@@ -94,7 +95,9 @@ def rm_anova(
         cells, note = complete_cells(frame, dv, factors, subject)
         n = cells[subject].nunique()
         if n < 2:
-            raise Skipped(f"needs at least 2 participants with every condition, got {n}")
+            # Said with the whole rule, so that the note names the number the test needs.
+            needed = participants_needed(frame, factors)
+            raise Skipped(f"needs at least {needed} participants with every condition, got {n}")
         require_more_participants(frame, factors, terms, n)
         require_representable(cells[dv], dv)
         if equal_to_rounding(cells[dv]):

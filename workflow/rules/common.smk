@@ -218,7 +218,8 @@ def results_input(wildcards):
     says it cannot test C3.
     """
     folder = PROCESSED / wildcards.ds
-    tables = {name: folder / f"{name}.csv" for name in ("trials", "steps", "stats", "likert")}
+    names = ("trials", "steps", "stats", "likert", "validation")
+    tables = {name: folder / f"{name}.csv" for name in names}
     if CASE_STUDY and wildcards.ds in GENERATED:
         tables["arbitration"] = PROCESSED / "case_study" / "arbitration.csv"
         tables["case_steps"] = PROCESSED / "case_study" / "steps.csv"
@@ -251,7 +252,7 @@ def stats_input(wildcards):
     removed here, they are rebuilt with the tables. A dry run only says so.
     """
     folder = PROCESSED / wildcards.ds
-    tables = {name: folder / f"{name}.csv" for name in ("trials", "likert")}
+    tables = {name: folder / f"{name}.csv" for name in ("trials", "likert", "validation")}
     if not all(path.exists() for path in tables.values()):
         for stale in (folder / "stats.csv", folder / "stats.md"):
             if stale.exists() and workflow.dryrun:

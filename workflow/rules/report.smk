@@ -9,6 +9,7 @@
 rule report_summary:
     input:
         stats=PROCESSED / "{ds}" / "stats.csv",
+        validation=PROCESSED / "{ds}" / "validation.csv",
     output:
         md=PROCESSED / "{ds}" / "summary.md",
         html=report(
@@ -23,7 +24,7 @@ rule report_summary:
         "../envs/casa.yaml"
     shell:
         "exec casa report summary --stats {input.stats} --dataset {wildcards.ds} "
-        "--out-md {output.md} --out-html {output.html} > {log} 2>&1"
+        "--validation {input.validation} --out-md {output.md} --out-html {output.html} > {log} 2>&1"
 
 
 rule report_results:
@@ -50,7 +51,8 @@ rule report_results:
     shell:
         "exec casa report results --dataset {wildcards.ds} --trials {input.trials} "
         "--steps {input.steps} --stats {input.stats} --likert {input.likert} "
-        "{params.case_study} {params.operator} --epsilon {params.epsilon} "
+        "--validation {input.validation} {params.case_study} {params.operator} "
+        "--epsilon {params.epsilon} "
         "{params.provenance} --out {output.md} --out-html {output.html} > {log} 2>&1"
 
 

@@ -26,5 +26,6 @@ rule stats:
         config=CONFIG_FILE,
     shell:
         "exec casa stats --trials {input.trials} {params.likert} {params.margins} "
+        "--validation {input.validation} "
         "--config {params.config} "
         "--out-csv {output.csv} --out-md {output.md} --out-wide {output.wide} > {log} 2>&1"
