@@ -7,9 +7,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from matplotlib.image import imread
-
 import pandas as pd
+from matplotlib.image import imread
 
 from casa_core import figures
 from casa_core.assist.tasks import intended_trajectory

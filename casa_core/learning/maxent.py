@@ -234,9 +234,8 @@ class MaxEntIRL:
         return self
 
 
-def _intent_builder(name: str, object_names, positions, waypoints: np.ndarray, config: IRLConfig):
-    """``build(network, offset)``: the learned intent of a candidate network, calibrated
-    from the demonstrations' mean start when the config calibrates, with its factor."""
+def _intent_builder(name: str, object_names, positions, waypoints, config: IRLConfig):
+    """``build(network, offset)``: a candidate network's intent (calibrated, and its factor)."""
     start = waypoints[:, 0, :].mean(axis=0)
 
     def build(weights_of: torch.nn.Module, offset: float):
