@@ -255,3 +255,33 @@ def test_config_overrides_reach_the_package_commands(repo):
     before = effective.stat().st_mtime_ns
     assert snakemake(repo, "--dry-run").returncode == 0
     assert effective.stat().st_mtime_ns == before
+
+
+def test_building_another_dataset_leaves_the_configs_and_the_progress_as_they_are(repo):
+    # A finished build: the configs written, then every robustness job's benchmark.
+    from casa_core.config import load_config
+    from casa_core.experiments.progress import target_units
+
+    assert snakemake(repo, "--dry-run").returncode == 0
+    interim = repo / "data" / "interim"
+    configs = sorted(interim.rglob("config.yaml"))
+    units = target_units(load_config(repo / "config" / "config.yaml"), "robustness")
+    assert len(configs) == 1 + len(units)  # the study's and each variant's
+    for unit, jobs in units.items():
+        folder = repo / "benchmarks" / "robustness" / unit
+        folder.mkdir(parents=True)
+        for job in jobs:
+            (folder / f"{job}.tsv").write_text("s\th:m:s\n1.0\t0:00:01\n")
+    written = {path: path.stat().st_mtime_ns for path in configs}
+    # Another dataset alone, then another choice of targets: no job reads these keys.
+    for choice in ("datasets=[lab]", "simulate=false"):
+        assert snakemake(repo, "--dry-run", "--config", choice).returncode == 0
+        assert {path: path.stat().st_mtime_ns for path in configs} == written, choice
+    progress = subprocess.run(
+        [str(BIN / "casa"), "progress", "robustness", "--config", "config/config.yaml"],
+        cwd=repo,
+        env=ENV,
+        capture_output=True,
+        text=True,
+    )
+    assert f"robustness: {len(units)}/{len(units)} variants done" in progress.stdout, progress

@@ -45,11 +45,13 @@ def effective_config_file(path=Path("data/interim/config.yaml"), settings=None):
     """The validated config, --config overrides and schema defaults included, for the package.
 
     The package commands read a config file; this one is what the workflow itself
-    sees, so that `--config KEY=VALUE` reaches them too. It is rewritten only when its
-    content changes, so that an unchanged config reruns nothing. `settings`: another
-    whole config to write instead (a robustness variant's).
+    sees, so that `--config KEY=VALUE` reaches them too, less the keys that only choose
+    the targets (casa_core.config.TARGET_KEYS: datasets, simulate). It is rewritten only
+    when its content changes, so that an unchanged config reruns nothing and keeps its
+    mtime (the one `casa progress` compares benchmarks with). `settings`: another whole
+    config to write instead (a robustness variant's).
     """
-    text = casa_config.config_text(config if settings is None else settings)
+    text = casa_config.job_config_text(config if settings is None else settings)
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
         atomic_write_text(path, text)
     return str(path)
