@@ -17,9 +17,9 @@ from casa_core.assist import assistant, presets
 from casa_core.config import (
     DEFAULT_CONFIG,
     SCHEMA_PATH,
+    TARGET_KEYS,
     ConfigError,
     Provenance,
-    TARGET_KEYS,
     config_digest,
     config_text,
     default,
