@@ -39,6 +39,11 @@ include: "workflow/rules/robustness.smk"
 include: "workflow/rules/power.smk"
 
 
+# A failed run ends on why: each failed job's own message, from its log (common.smk).
+onerror:
+    print_failures(log)
+
+
 # The report's landing page: results, figures, statistics, tables, then the workflow.
 report: "workflow/report/workflow.rst"
 

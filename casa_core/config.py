@@ -56,9 +56,8 @@ PACKAGE_DEFAULTS = "the package's defaults"
 OVERRIDES = "--config"
 #: The variant that overlays nothing: the study's config as it is.
 DEFAULT_VARIANT = "default"
-#: The keys that choose what a run builds (its default target), not what any job reads:
-#: left out of the config files the workflow writes for its jobs (:func:`job_config_text`),
-#: so that building another dataset rewrites none of them and reruns nothing.
+#: The keys that choose what a run builds, not what a job reads: left out of the config
+#: files the workflow writes for its jobs, so that another choice reruns nothing.
 TARGET_KEYS = ("datasets", "simulate")
 #: Hex digits of the sha256 that name an effective config: enough to tell configurations
 #: apart at a glance, short enough for a line of a table or a figure's caption.
@@ -169,24 +168,12 @@ def config_text(config: Mapping) -> str:
     return yaml.safe_dump(_plain(config), sort_keys=True)
 
 
-def job_config_text(config: Mapping) -> str:
-    """The config the jobs read, as :func:`config_text`: without :data:`TARGET_KEYS`.
-
-    Examples
-    --------
-    >>> job_config_text({"datasets": ["mylab"], "simulate": False, "simulation": {"seed": 2021}})
-    'simulation:\\n  seed: 2021\\n'
-    """
-    return config_text({key: value for key, value in config.items() if key not in TARGET_KEYS})
-
-
 def config_digest(path: Path | str) -> str:
     """The first :data:`DIGEST_LENGTH` hex digits of the sha256 of a config file's text.
 
     The file is the effective config the workflow writes (``data/interim/config.yaml``,
-    :func:`job_config_text`: keys sorted), so the same configuration always has the same
-    digest, and any changed key, default or ``--config`` override another (but those of
-    :data:`TARGET_KEYS`, which change no output).
+    :func:`config_text`, less :data:`TARGET_KEYS`), so the same configuration always has
+    the same digest, and any changed key, default or ``--config`` override another.
 
     Raises
     ------

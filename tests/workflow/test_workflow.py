@@ -149,6 +149,29 @@ def test_a_bad_file_stops_its_dataset_only_and_every_problem_is_listed(repo):
     assert "p02/known_goal_NA_no_misspecification" in trials
 
 
+def test_a_failed_build_ends_on_the_rules_own_message_and_the_hint(repo):
+    _break(repo)
+    result = snakemake(repo, "data/processed/pilot/trials.csv")
+    assert result.returncode != 0
+    lines = result.stderr.splitlines()
+
+    def last(text: str) -> int:
+        return max([i for i, line in enumerate(lines) if text in line], default=-1)
+
+    # Snakemake lists the job's inputs (every raw file) when it starts and when it fails;
+    # then the rule, what it said (file, key, rule broken) and the hint.
+    order = [
+        last("    input: data/raw/pilot/"),
+        last("rule validate failed; logs/validate/pilot.log:"),
+        last("p01/known_goal_NA_no_misspecification.json: key 'task': [enum]"),
+        last("hint: ") if "--config allow_invalid=true" in lines[last("hint: ")] else -1,
+    ]
+    assert 0 <= order[0] and order == sorted(order), "\n".join(lines[order[0] :])
+    # After the hint only Snakemake's own closing lines: its log, the time, the verdict.
+    footer = lines[order[-1] + 1 :]
+    assert footer[0].startswith("Complete log(s): ") and len(footer) <= 4, footer
+
+
 def test_a_badly_named_dataset_folder_is_refused(repo):
     (repo / "data" / "raw" / "my data").mkdir()
     result = snakemake(repo, "--dry-run")

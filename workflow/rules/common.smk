@@ -13,6 +13,7 @@ from casa_core.experiments import robustness as casa_variants
 from casa_core import vocabulary
 from casa_core.io.population import population_label
 from casa_core.io.atomic import atomic_write_text
+from casa_core.io.workflow_log import failure_summary
 from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.scene import DEFAULT_SCENE
 
@@ -51,7 +52,9 @@ def effective_config_file(path=Path("data/interim/config.yaml"), settings=None):
     mtime (the one `casa progress` compares benchmarks with). `settings`: another whole
     config to write instead (a robustness variant's).
     """
-    text = casa_config.job_config_text(config if settings is None else settings)
+    settings = config if settings is None else settings
+    jobs_read = {k: v for k, v in settings.items() if k not in casa_config.TARGET_KEYS}
+    text = casa_config.config_text(jobs_read)
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
         atomic_write_text(path, text)
     return str(path)
@@ -171,6 +174,16 @@ def likert_option(wildcards, input):
 
 def allow_invalid_flag(wildcards=None):
     return "--allow-invalid" if config["allow_invalid"] else ""
+
+
+def print_failures(snakemake_logs):
+    """Print, last, what each failed job said (casa_core.io.workflow_log), from Snakemake's logs."""
+    logs = [snakemake_logs] if isinstance(snakemake_logs, str) else snakemake_logs or []
+    paths = [path for path in map(Path, logs) if path.is_file()]
+    text = "\n".join(path.read_text(encoding="utf-8", errors="replace") for path in paths)
+    summary = failure_summary(text, allow_invalid=config["allow_invalid"])
+    if summary:
+        print(summary, file=sys.stderr, flush=True)
 
 
 def dataset_outputs(ds):
