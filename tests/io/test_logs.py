@@ -451,6 +451,19 @@ def test_surveys_rows_are_checked_one_by_one():
     assert frame.attrs["lines"] == [2, 4]
 
 
+@pytest.mark.parametrize("mark", [";", "\t"])
+def test_a_file_separated_by_another_delimiter_says_so(mark):
+    # As a spreadsheet set to a decimal comma saves it: ';' between fields, ',' in numbers.
+    rows = [SURVEY_COLUMNS, ["p01", "known_goal", "CASA", "no_misspecification", "useful", "5"]]
+    text = "".join(mark.join(row) + "\n" for row in rows)
+    trial = "t;x;y;z;rot;keys\n0;0,45;-0,22;0,38;0;x+\n".replace(";", mark)
+    for parse, name in ((parse_surveys_csv, "surveys.csv"), (parse_trial_csv, "t.csv")):
+        frame, problems = parse(text if name == "surveys.csv" else trial, name)
+        assert frame is None and [(p.where, p.rule) for p in problems] == [("line 1", "csv-format")]
+        assert f"the file looks separated by {mark!r}" in problems[0].message, problems
+        assert "comma-separated" in problems[0].message
+
+
 def test_header_only_surveys_is_a_warning(tmp_path):
     _trial(tmp_path)
     (tmp_path / "surveys.csv").write_text(",".join(SURVEY_COLUMNS) + "\n")
