@@ -464,6 +464,19 @@ def test_a_file_separated_by_another_delimiter_says_so(mark):
         assert "comma-separated" in problems[0].message
 
 
+def test_an_empty_participant_folder_is_a_warning(tmp_path):
+    _trial(tmp_path / "p01")
+    (tmp_path / "p02" / "session").mkdir(parents=True)  # named once, at its outermost
+    (tmp_path / "p03" / ".session").mkdir(parents=True)  # hidden files are not read
+    (tmp_path / "p03" / ".session" / "notes").write_text("")
+    assert _found(tmp_path) == {
+        ("p02", "", "empty-folder", "warning"),
+        ("p03", "", "empty-folder", "warning"),
+    }
+    # The folder given itself, without logs, stays an error.
+    assert ("p02", "", "non-empty", "error") in _found(tmp_path / "p02")
+
+
 def test_header_only_surveys_is_a_warning(tmp_path):
     _trial(tmp_path)
     (tmp_path / "surveys.csv").write_text(",".join(SURVEY_COLUMNS) + "\n")
@@ -525,6 +538,7 @@ def test_symlinks_out_of_the_dataset_are_refused_and_never_read(tmp_path, monkey
         ("notes.md", "symlink", "error"),
         ("linked", "symlink", "error"),
         ("again", "symlink", "warning"),
+        ("inner", "empty-folder", "warning"),  # it holds no file
         ("gone.json", "pair", "error"),
         ("gone.csv", "symlink", "error"),
     }
