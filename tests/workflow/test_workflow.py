@@ -172,12 +172,24 @@ def test_a_failed_build_ends_on_the_rules_own_message_and_the_hint(repo):
     assert footer[0].startswith("Complete log(s): ") and len(footer) <= 4, footer
 
 
-def test_a_badly_named_dataset_folder_is_refused(repo):
-    (repo / "data" / "raw" / "my data").mkdir()
-    result = snakemake(repo, "--dry-run")
+def test_a_badly_named_dataset_folder_fails_alone_with_the_rename_hint(repo):
+    for name in ("my data", "robustness"):
+        write_dataset(repo / "data" / "raw" / name, participants=("q1",), surveys=False)
+    # The default target plans the other datasets, and a failing job per refused folder.
+    dry = snakemake(repo, "--dry-run")
+    assert dry.returncode == 0, dry.stderr
+    assert "data/raw/my data: a dataset folder name must match" in dry.stderr
+    for planned in ("logs/refused/my_data.refused", "logs/refused/robustness_data.refused"):
+        assert planned in dry.stdout, planned
+    assert "data/processed/lab/results.md" in dry.stdout
+    # Run: the other dataset is built, the run fails, and says last how to rename.
+    targets = ("data/processed/lab/trials.csv", "logs/refused/my_data.refused")
+    result = snakemake(repo, *targets)
     assert result.returncode != 0
-    text = result.stdout + result.stderr
-    assert "data/raw/my data" in text and "rename it" in text
+    assert (repo / "data" / "processed" / "lab" / "trials.csv").is_file(), result.stderr
+    lines = result.stderr.splitlines()
+    said = [i for i, line in enumerate(lines) if "rename it, e.g. to data/raw/my_data," in line]
+    assert said and lines[said[-1] + 1].startswith("Complete log(s): "), lines[-8:]
 
 
 FIGURES = ("objective.pdf", "objective.png", "likert.pdf", "likert.png")

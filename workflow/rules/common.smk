@@ -84,6 +84,13 @@ SIMULATED_NAME = "simulated"
 GENERATED = (SIMULATED_NAME,) if SIMULATE else ()
 
 
+# Dataset folders whose names are refused: a key (a portable name) and the reason. Each
+# is a target that fails (workflow/rules/datasets.smk), so that the other datasets build
+# and the run still stops on it.
+REFUSED = {}
+REFUSED_LOGS = Path("logs/refused")
+
+
 def discover_datasets():
     """The folders of data/raw (hidden ones skipped), plus the datasets rules generate.
 
@@ -100,13 +107,23 @@ def discover_datasets():
             "(simulate=false)",
             file=sys.stderr,
         )
-    for name in sorted(found):
-        if not DATASET_NAME.fullmatch(name) or name in RESERVED:
-            raise ValueError(
-                f"data/raw/{name}: a dataset folder name must match "
-                f"{DATASET_NAME.pattern} and not be one of {', '.join(RESERVED)}; rename it"
-            )
-    return sorted(found)
+    refused = sorted(n for n in found if not DATASET_NAME.fullmatch(n) or n in RESERVED)
+    for name in refused:
+        key = portable_name(name)
+        key = f"{key}_{len(REFUSED)}" if key in REFUSED else key
+        REFUSED[key] = (
+            f"data/raw/{name}: a dataset folder name must match {DATASET_NAME.pattern} and "
+            f"not be one of {', '.join(RESERVED)}; rename it, e.g. to data/raw/"
+            f"{portable_name(name)}, and run again (the other datasets are built)"
+        )
+        print(f"{REFUSED[key]}; this run fails on it", file=sys.stderr)
+    return sorted(set(found) - set(refused))
+
+
+def portable_name(name):
+    """A dataset name like `name` that DATASET_NAME allows and RESERVED does not hold."""
+    portable = re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_-") or "dataset"
+    return f"{portable}_data" if portable in RESERVED else portable
 
 
 def chosen_datasets():
@@ -130,6 +147,7 @@ WHOLE_BUILD = not config["datasets"]
 
 wildcard_constraints:
     ds="|".join(re.escape(d) for d in DATASETS) or "(?!)",
+    refused="|".join(re.escape(key) for key in REFUSED) or "(?!)",
 
 
 def raw_files(wildcards):
@@ -201,6 +219,8 @@ def dataset_outputs(ds):
 
 def all_outputs():
     outputs = [out for ds in TARGET_DATASETS for out in dataset_outputs(ds)]
+    # A refused dataset folder fails the default target, whose other jobs still run.
+    outputs += [str(REFUSED_LOGS / f"{key}.refused") for key in REFUSED if WHOLE_BUILD]
     outputs.append(str(FIGURES / "scene.png"))
     if CASE_STUDY and WHOLE_BUILD:
         outputs += [str(PROCESSED / "case_study" / f) for f in ("steps.csv", "arbitration.csv")]
