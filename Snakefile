@@ -48,9 +48,10 @@ onerror:
 report: "workflow/report/workflow.rst"
 
 
+# `snakemake --report` reports what was built of it (common.smk: built_only).
 rule all:
     default_target: True
     input:
-        all_outputs(),
-        report_pages(),
-        rules.robustness.input if SIMULATE and WHOLE_BUILD else [],
+        built_only(all_outputs()),
+        built_only(report_pages()),
+        built_only(rules.robustness.input if SIMULATE and WHOLE_BUILD else []),

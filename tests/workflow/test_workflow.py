@@ -320,3 +320,15 @@ def test_building_another_dataset_leaves_the_configs_and_the_progress_as_they_ar
         text=True,
     )
     assert f"robustness: {len(units)}/{len(units)} variants done" in progress.stdout, progress
+
+
+def test_the_report_after_a_build_of_one_dataset_covers_what_was_built(repo):
+    built = snakemake(repo, "--cores", "2", "--config", "datasets=[lab]")
+    assert built.returncode == 0, built.stderr[-3000:]
+    # The default target (the simulated study, pilot, the case study...) was not built:
+    # the report says what was, without naming the datasets.
+    report = snakemake(repo, "--report", "report.html")
+    assert report.returncode == 0, report.stderr[-3000:]
+    html = (repo / "report.html").read_text(errors="replace")
+    assert "Objective metrics of dataset lab" in html and "The scene of the study" in html
+    assert "dataset pilot" not in html and "dataset simulated" not in html

@@ -236,6 +236,20 @@ REPORT = Path("data/report")
 REPORT_TABLES = ("trials", "validation")
 
 
+# `snakemake --report`: Snakemake stops on a report item of the DAG that does not exist,
+# so that the report of a run that built one dataset would fail on the others'. It
+# reports what was built instead (built_only). Snakemake tells the Snakefile nothing of
+# the report, hence its command line; --report-after-run builds first, so everything.
+REPORTING = any(arg == "--report" or arg.startswith("--report=") for arg in sys.argv) and (
+    "--report-after-run" not in sys.argv
+)
+
+
+def built_only(paths):
+    """The default target's `paths`; for a report (REPORTING), those that exist."""
+    return [path for path in map(str, paths) if Path(path).exists()] if REPORTING else paths
+
+
 def report_pages():
     pages = [str(PROCESSED / ds / "summary.md") for ds in TARGET_DATASETS]
     names = ("results", "summary", "stats", *REPORT_TABLES)
