@@ -182,6 +182,10 @@ def test_a_badly_named_dataset_folder_fails_alone_with_the_rename_hint(repo):
     for planned in ("logs/refused/my_data.refused", "logs/refused/robustness_data.refused"):
         assert planned in dry.stdout, planned
     assert "data/processed/lab/results.md" in dry.stdout
+    # Another dataset named alone: the refused folder is only said to be left out.
+    alone = snakemake(repo, "--dry-run", "--config", "datasets=[lab]")
+    assert alone.returncode == 0 and "refused_dataset" not in alone.stdout, alone.stderr
+    assert "rename it, e.g. to data/raw/my_data, and run again" in alone.stderr
     # Run: the other dataset is built, the run fails, and says last how to rename.
     targets = ("data/processed/lab/trials.csv", "logs/refused/my_data.refused")
     result = snakemake(repo, *targets)

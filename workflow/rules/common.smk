@@ -116,7 +116,8 @@ def discover_datasets():
             f"not be one of {', '.join(RESERVED)}; rename it, e.g. to data/raw/"
             f"{portable_name(name)}, and run again (the other datasets are built)"
         )
-        print(f"{REFUSED[key]}; this run fails on it", file=sys.stderr)
+        fate = "not built" if config["datasets"] else "the run fails on it"
+        print(f"{REFUSED[key]}; {fate}", file=sys.stderr)
     return sorted(set(found) - set(refused))
 
 
