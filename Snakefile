@@ -39,13 +39,19 @@ include: "workflow/rules/robustness.smk"
 include: "workflow/rules/power.smk"
 
 
+# A failed run ends on why: each failed job's own message, from its log (common.smk).
+onerror:
+    print_failures(log)
+
+
 # The report's landing page: results, figures, statistics, tables, then the workflow.
 report: "workflow/report/workflow.rst"
 
 
+# `snakemake --report` reports what was built of it (common.smk: built_only).
 rule all:
     default_target: True
     input:
-        all_outputs(),
-        report_pages(),
-        rules.robustness.input if SIMULATE and WHOLE_BUILD else [],
+        built_only(all_outputs()),
+        built_only(report_pages()),
+        built_only(rules.robustness.input if SIMULATE and WHOLE_BUILD else []),

@@ -56,6 +56,9 @@ PACKAGE_DEFAULTS = "the package's defaults"
 OVERRIDES = "--config"
 #: The variant that overlays nothing: the study's config as it is.
 DEFAULT_VARIANT = "default"
+#: The keys that choose what a run builds, not what a job reads: left out of the config
+#: files the workflow writes for its jobs, so that another choice reruns nothing.
+TARGET_KEYS = ("datasets", "simulate")
 #: Hex digits of the sha256 that name an effective config: enough to tell configurations
 #: apart at a glance, short enough for a line of a table or a figure's caption.
 DIGEST_LENGTH = 12
@@ -169,8 +172,8 @@ def config_digest(path: Path | str) -> str:
     """The first :data:`DIGEST_LENGTH` hex digits of the sha256 of a config file's text.
 
     The file is the effective config the workflow writes (``data/interim/config.yaml``,
-    :func:`config_text`: keys sorted), so the same configuration always has the same
-    digest, and any changed key, default or ``--config`` override another.
+    :func:`config_text`, less :data:`TARGET_KEYS`), so the same configuration always has
+    the same digest, and any changed key, default or ``--config`` override another.
 
     Raises
     ------

@@ -12,7 +12,8 @@ code needs; the contract is ``docs/data-contracts.md``. The modules, each with o
 - :mod:`~casa_core.io.atomic`: the one atomic writer of every output;
 - :mod:`~casa_core.io.tables`: the processed tables read back, and tidy tables' input checks;
 - :mod:`~casa_core.io.original`: the original implementation's session files;
-- :mod:`~casa_core.io.population`: the operator population file of `casa calibrate`.
+- :mod:`~casa_core.io.population`: the operator population file of `casa calibrate`;
+- :mod:`~casa_core.io.workflow_log`: why a workflow run failed, from Snakemake's log.
 """
 
 from casa_core.io.atomic import (

@@ -17,6 +17,8 @@ import pandas as pd
 
 from casa_core.io.problems import Problem
 
+#: Delimiters a CSV is sometimes written with instead of ',' (by spreadsheets, by hand).
+OTHER_DELIMITERS = (";", "\t")
 # At most this many line numbers are spelled out per (column, rule); the rest are counted.
 MAX_LINES_LISTED = 10
 
@@ -35,7 +37,8 @@ def read_csv_cells(text: str, file: str) -> tuple[pd.DataFrame | None, list[Prob
     """A CSV as a table of strings indexed by line number (the header is line 1).
 
     Blank lines are skipped. Returns problems instead of a table for an empty
-    file, repeated column names, or rows whose number of fields is not the header's.
+    file, a header of one field holding another delimiter (``;``, tab), repeated column
+    names, or rows whose number of fields is not the header's.
     """
     reader = csv.reader(io.StringIO(text))
     try:
@@ -45,6 +48,15 @@ def read_csv_cells(text: str, file: str) -> tuple[pd.DataFrame | None, list[Prob
     if not rows:
         return None, [Problem(file, "", "csv-format", "the file is empty; expected a header row")]
     header = rows[0][1]
+    wrong = [mark for mark in OTHER_DELIMITERS if len(header) == 1 and mark in header[0]]
+    if wrong:
+        # A spreadsheet set to a decimal comma saves ';'-separated "CSV": one column here.
+        message = (
+            f"the header is one field, {header[0][:60]!r}: the file looks separated by "
+            f"{wrong[0]!r}; casa-trial/1 files are comma-separated: save it with ',' as the "
+            "delimiter (and '.' as the decimal mark)"
+        )
+        return None, [Problem(file, "line 1", "csv-format", message)]
     duplicates = sorted({c for c in header if header.count(c) > 1})
     if duplicates:
         where = ", ".join(repr(c) for c in duplicates)

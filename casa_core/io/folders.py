@@ -110,6 +110,31 @@ def _walk(folder: Path) -> tuple[list[Path], list[FileCheck]]:
     return sorted(found), links
 
 
+def _empty_folders(folder: Path, found: list[Path]) -> list[FileCheck]:
+    """A warning (``empty-folder``) for each folder below ``folder`` without a file in it.
+
+    A participant's folder left empty (its logs not copied yet) would otherwise pass as
+    a dataset without that participant. Only the outermost empty folder is named.
+    """
+    holding = {parent for path in found for parent in path.relative_to(folder).parents}
+    checks = []
+    for root, dirs, _ in os.walk(folder, followlinks=False):
+        dirs[:] = sorted(
+            d for d in dirs if not d.startswith(".") and not (Path(root) / d).is_symlink()
+        )
+        for name in list(dirs):
+            path = Path(root) / name
+            if path.relative_to(folder) not in holding:
+                dirs.remove(name)
+                message = "an empty folder: no logs here (not copied yet?); nothing of it is read"
+                checks.append(
+                    FileCheck(
+                        path, "folder", [Problem(str(path), "", "empty-folder", message, "warning")]
+                    )
+                )
+    return checks
+
+
 def find_files(folder: Path | str) -> list[Path]:
     """Every non-hidden file below ``folder``, sorted, so that checks run in a fixed order.
 
@@ -334,7 +359,8 @@ def check_paths(paths: Iterable[Path | str]) -> list[FileCheck]:
     -------
     list of FileCheck
         First a ``"missing"`` check for each path that does not exist and a ``"folder"``
-        check for each folder without logs, then :func:`check_files` of the rest.
+        check for each folder without logs (an error for a folder given, a warning,
+        ``empty-folder``, for an empty one below it), then :func:`check_files` of the rest.
 
     Examples
     --------
@@ -349,7 +375,7 @@ def check_paths(paths: Iterable[Path | str]) -> list[FileCheck]:
         if path.is_dir():
             found, links = _walk(path)
             files += [(f, path) for f in found]
-            problems += links
+            problems += links + _empty_folders(path, found)
             if not any(f.suffix.lower() in TRIAL_SUFFIXES for f in found):
                 missing = Problem(str(path), "", "non-empty", "no trial logs or surveys found")
                 problems.append(FileCheck(path, "folder", [missing]))

@@ -451,6 +451,32 @@ def test_surveys_rows_are_checked_one_by_one():
     assert frame.attrs["lines"] == [2, 4]
 
 
+@pytest.mark.parametrize("mark", [";", "\t"])
+def test_a_file_separated_by_another_delimiter_says_so(mark):
+    # As a spreadsheet set to a decimal comma saves it: ';' between fields, ',' in numbers.
+    rows = [SURVEY_COLUMNS, ["p01", "known_goal", "CASA", "no_misspecification", "useful", "5"]]
+    text = "".join(mark.join(row) + "\n" for row in rows)
+    trial = "t;x;y;z;rot;keys\n0;0,45;-0,22;0,38;0;x+\n".replace(";", mark)
+    for parse, name in ((parse_surveys_csv, "surveys.csv"), (parse_trial_csv, "t.csv")):
+        frame, problems = parse(text if name == "surveys.csv" else trial, name)
+        assert frame is None and [(p.where, p.rule) for p in problems] == [("line 1", "csv-format")]
+        assert f"the file looks separated by {mark!r}" in problems[0].message, problems
+        assert "comma-separated" in problems[0].message
+
+
+def test_an_empty_participant_folder_is_a_warning(tmp_path):
+    _trial(tmp_path / "p01")
+    (tmp_path / "p02" / "session").mkdir(parents=True)  # named once, at its outermost
+    (tmp_path / "p03" / ".session").mkdir(parents=True)  # hidden files are not read
+    (tmp_path / "p03" / ".session" / "notes").write_text("")
+    assert _found(tmp_path) == {
+        ("p02", "", "empty-folder", "warning"),
+        ("p03", "", "empty-folder", "warning"),
+    }
+    # The folder given itself, without logs, stays an error.
+    assert ("p02", "", "non-empty", "error") in _found(tmp_path / "p02")
+
+
 def test_header_only_surveys_is_a_warning(tmp_path):
     _trial(tmp_path)
     (tmp_path / "surveys.csv").write_text(",".join(SURVEY_COLUMNS) + "\n")
@@ -512,6 +538,7 @@ def test_symlinks_out_of_the_dataset_are_refused_and_never_read(tmp_path, monkey
         ("notes.md", "symlink", "error"),
         ("linked", "symlink", "error"),
         ("again", "symlink", "warning"),
+        ("inner", "empty-folder", "warning"),  # it holds no file
         ("gone.json", "pair", "error"),
         ("gone.csv", "symlink", "error"),
     }

@@ -149,12 +149,51 @@ def test_a_bad_file_stops_its_dataset_only_and_every_problem_is_listed(repo):
     assert "p02/known_goal_NA_no_misspecification" in trials
 
 
-def test_a_badly_named_dataset_folder_is_refused(repo):
-    (repo / "data" / "raw" / "my data").mkdir()
-    result = snakemake(repo, "--dry-run")
+def test_a_failed_build_ends_on_the_rules_own_message_and_the_hint(repo):
+    _break(repo)
+    result = snakemake(repo, "data/processed/pilot/trials.csv")
     assert result.returncode != 0
-    text = result.stdout + result.stderr
-    assert "data/raw/my data" in text and "rename it" in text
+    lines = result.stderr.splitlines()
+
+    def last(text: str) -> int:
+        return max([i for i, line in enumerate(lines) if text in line], default=-1)
+
+    # Snakemake lists the job's inputs (every raw file) when it starts and when it fails;
+    # then the rule, what it said (file, key, rule broken) and the hint.
+    order = [
+        last("    input: data/raw/pilot/"),
+        last("rule validate failed; logs/validate/pilot.log:"),
+        last("p01/known_goal_NA_no_misspecification.json: key 'task': [enum]"),
+        last("hint: ") if "--config allow_invalid=true" in lines[last("hint: ")] else -1,
+    ]
+    assert 0 <= order[0] and order == sorted(order), "\n".join(lines[order[0] :])
+    # After the hint only Snakemake's own closing lines: its log, the time, the verdict.
+    footer = lines[order[-1] + 1 :]
+    assert footer[0].startswith("Complete log(s): ") and len(footer) <= 4, footer
+
+
+def test_a_badly_named_dataset_folder_fails_alone_with_the_rename_hint(repo):
+    for name in ("my data", "robustness"):
+        write_dataset(repo / "data" / "raw" / name, participants=("q1",), surveys=False)
+    # The default target plans the other datasets, and a failing job per refused folder.
+    dry = snakemake(repo, "--dry-run")
+    assert dry.returncode == 0, dry.stderr
+    assert "data/raw/my data: a dataset folder name must match" in dry.stderr
+    for planned in ("logs/refused/my_data.refused", "logs/refused/robustness_data.refused"):
+        assert planned in dry.stdout, planned
+    assert "data/processed/lab/results.md" in dry.stdout
+    # Another dataset named alone: the refused folder is only said to be left out.
+    alone = snakemake(repo, "--dry-run", "--config", "datasets=[lab]")
+    assert alone.returncode == 0 and "refused_dataset" not in alone.stdout, alone.stderr
+    assert "rename it, e.g. to data/raw/my_data, and run again" in alone.stderr
+    # Run: the other dataset is built, the run fails, and says last how to rename.
+    targets = ("data/processed/lab/trials.csv", "logs/refused/my_data.refused")
+    result = snakemake(repo, *targets)
+    assert result.returncode != 0
+    assert (repo / "data" / "processed" / "lab" / "trials.csv").is_file(), result.stderr
+    lines = result.stderr.splitlines()
+    said = [i for i, line in enumerate(lines) if "rename it, e.g. to data/raw/my_data," in line]
+    assert said and lines[said[-1] + 1].startswith("Complete log(s): "), lines[-8:]
 
 
 FIGURES = ("objective.pdf", "objective.png", "likert.pdf", "likert.png")
@@ -255,3 +294,45 @@ def test_config_overrides_reach_the_package_commands(repo):
     before = effective.stat().st_mtime_ns
     assert snakemake(repo, "--dry-run").returncode == 0
     assert effective.stat().st_mtime_ns == before
+
+
+def test_building_another_dataset_leaves_the_configs_and_the_progress_as_they_are(repo):
+    # A finished build: the configs written, then every robustness job's benchmark.
+    from casa_core.config import load_config
+    from casa_core.experiments.progress import target_units
+
+    assert snakemake(repo, "--dry-run").returncode == 0
+    interim = repo / "data" / "interim"
+    configs = sorted(interim.rglob("config.yaml"))
+    units = target_units(load_config(repo / "config" / "config.yaml"), "robustness")
+    assert len(configs) == 1 + len(units)  # the study's and each variant's
+    for unit, jobs in units.items():
+        folder = repo / "benchmarks" / "robustness" / unit
+        folder.mkdir(parents=True)
+        for job in jobs:
+            (folder / f"{job}.tsv").write_text("s\th:m:s\n1.0\t0:00:01\n")
+    written = {path: path.stat().st_mtime_ns for path in configs}
+    # Another dataset alone, then another choice of targets: no job reads these keys.
+    for choice in ("datasets=[lab]", "simulate=false"):
+        assert snakemake(repo, "--dry-run", "--config", choice).returncode == 0
+        assert {path: path.stat().st_mtime_ns for path in configs} == written, choice
+    progress = subprocess.run(
+        [str(BIN / "casa"), "progress", "robustness", "--config", "config/config.yaml"],
+        cwd=repo,
+        env=ENV,
+        capture_output=True,
+        text=True,
+    )
+    assert f"robustness: {len(units)}/{len(units)} variants done" in progress.stdout, progress
+
+
+def test_the_report_after_a_build_of_one_dataset_covers_what_was_built(repo):
+    built = snakemake(repo, "--cores", "2", "--config", "datasets=[lab]")
+    assert built.returncode == 0, built.stderr[-3000:]
+    # The default target (the simulated study, pilot, the case study...) was not built:
+    # the report says what was, without naming the datasets.
+    report = snakemake(repo, "--report", "report.html")
+    assert report.returncode == 0, report.stderr[-3000:]
+    html = (repo / "report.html").read_text(errors="replace")
+    assert "Objective metrics of dataset lab" in html and "The scene of the study" in html
+    assert "dataset pilot" not in html and "dataset simulated" not in html

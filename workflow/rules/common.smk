@@ -13,6 +13,7 @@ from casa_core.experiments import robustness as casa_variants
 from casa_core import vocabulary
 from casa_core.io.population import population_label
 from casa_core.io.atomic import atomic_write_text
+from casa_core.io.workflow_log import failure_summary
 from casa_core.io.contract import INTENT_SUFFIX
 from casa_core.scene import DEFAULT_SCENE
 
@@ -45,11 +46,15 @@ def effective_config_file(path=Path("data/interim/config.yaml"), settings=None):
     """The validated config, --config overrides and schema defaults included, for the package.
 
     The package commands read a config file; this one is what the workflow itself
-    sees, so that `--config KEY=VALUE` reaches them too. It is rewritten only when its
-    content changes, so that an unchanged config reruns nothing. `settings`: another
-    whole config to write instead (a robustness variant's).
+    sees, so that `--config KEY=VALUE` reaches them too, less the keys that only choose
+    the targets (casa_core.config.TARGET_KEYS: datasets, simulate). It is rewritten only
+    when its content changes, so that an unchanged config reruns nothing and keeps its
+    mtime (the one `casa progress` compares benchmarks with). `settings`: another whole
+    config to write instead (a robustness variant's).
     """
-    text = casa_config.config_text(config if settings is None else settings)
+    settings = config if settings is None else settings
+    jobs_read = {k: v for k, v in settings.items() if k not in casa_config.TARGET_KEYS}
+    text = casa_config.config_text(jobs_read)
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
         atomic_write_text(path, text)
     return str(path)
@@ -79,6 +84,13 @@ SIMULATED_NAME = "simulated"
 GENERATED = (SIMULATED_NAME,) if SIMULATE else ()
 
 
+# Dataset folders whose names are refused: a key (a portable name) and the reason. Each
+# is a target that fails (workflow/rules/datasets.smk), so that the other datasets build
+# and the run still stops on it.
+REFUSED = {}
+REFUSED_LOGS = Path("logs/refused")
+
+
 def discover_datasets():
     """The folders of data/raw (hidden ones skipped), plus the datasets rules generate.
 
@@ -95,13 +107,24 @@ def discover_datasets():
             "(simulate=false)",
             file=sys.stderr,
         )
-    for name in sorted(found):
-        if not DATASET_NAME.fullmatch(name) or name in RESERVED:
-            raise ValueError(
-                f"data/raw/{name}: a dataset folder name must match "
-                f"{DATASET_NAME.pattern} and not be one of {', '.join(RESERVED)}; rename it"
-            )
-    return sorted(found)
+    refused = sorted(n for n in found if not DATASET_NAME.fullmatch(n) or n in RESERVED)
+    for name in refused:
+        key = portable_name(name)
+        key = f"{key}_{len(REFUSED)}" if key in REFUSED else key
+        REFUSED[key] = (
+            f"data/raw/{name}: a dataset folder name must match {DATASET_NAME.pattern} and "
+            f"not be one of {', '.join(RESERVED)}; rename it, e.g. to data/raw/"
+            f"{portable_name(name)}, and run again (the other datasets are built)"
+        )
+        fate = "not built" if config["datasets"] else "the run fails on it"
+        print(f"{REFUSED[key]}; {fate}", file=sys.stderr)
+    return sorted(set(found) - set(refused))
+
+
+def portable_name(name):
+    """A dataset name like `name` that DATASET_NAME allows and RESERVED does not hold."""
+    portable = re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_-") or "dataset"
+    return f"{portable}_data" if portable in RESERVED else portable
 
 
 def chosen_datasets():
@@ -125,6 +148,7 @@ WHOLE_BUILD = not config["datasets"]
 
 wildcard_constraints:
     ds="|".join(re.escape(d) for d in DATASETS) or "(?!)",
+    refused="|".join(re.escape(key) for key in REFUSED) or "(?!)",
 
 
 def raw_files(wildcards):
@@ -171,6 +195,16 @@ def allow_invalid_flag(wildcards=None):
     return "--allow-invalid" if config["allow_invalid"] else ""
 
 
+def print_failures(snakemake_logs):
+    """Print, last, what each failed job said (casa_core.io.workflow_log), from Snakemake's logs."""
+    logs = [snakemake_logs] if isinstance(snakemake_logs, str) else snakemake_logs or []
+    paths = [path for path in map(Path, logs) if path.is_file()]
+    text = "\n".join(path.read_text(encoding="utf-8", errors="replace") for path in paths)
+    summary = failure_summary(text, allow_invalid=config["allow_invalid"])
+    if summary:
+        print(summary, file=sys.stderr, flush=True)
+
+
 def dataset_outputs(ds):
     tables = ["trials", "steps", "likert", "stats", "wide", "validation"]
     outputs = [str(PROCESSED / ds / f"{name}.csv") for name in tables]
@@ -186,6 +220,8 @@ def dataset_outputs(ds):
 
 def all_outputs():
     outputs = [out for ds in TARGET_DATASETS for out in dataset_outputs(ds)]
+    # A refused dataset folder fails the default target, whose other jobs still run.
+    outputs += [str(REFUSED_LOGS / f"{key}.refused") for key in REFUSED if WHOLE_BUILD]
     outputs.append(str(FIGURES / "scene.png"))
     if CASE_STUDY and WHOLE_BUILD:
         outputs += [str(PROCESSED / "case_study" / f) for f in ("steps.csv", "arbitration.csv")]
@@ -199,6 +235,20 @@ def all_outputs():
 REPORT = Path("data/report")
 # The tables of every dataset; the simulated study also has learning.csv.
 REPORT_TABLES = ("trials", "validation")
+
+
+# `snakemake --report`: Snakemake stops on a report item of the DAG that does not exist,
+# so that the report of a run that built one dataset would fail on the others'. It
+# reports what was built instead (built_only). Snakemake tells the Snakefile nothing of
+# the report, hence its command line; --report-after-run builds first, so everything.
+REPORTING = any(arg == "--report" or arg.startswith("--report=") for arg in sys.argv) and (
+    "--report-after-run" not in sys.argv
+)
+
+
+def built_only(paths):
+    """The default target's `paths`; for a report (REPORTING), those that exist."""
+    return [path for path in map(str, paths) if Path(path).exists()] if REPORTING else paths
 
 
 def report_pages():

@@ -42,3 +42,18 @@ rule process:
     shell:
         "exec casa process {params.raw} --out {params.out} --scene {input.scene} "
         "--dataset {wildcards.ds} {params.allow_invalid} > {log} 2>&1"
+
+
+# A dataset folder whose name is refused (common.smk: discover_datasets): a job that
+# fails saying why and how to rename it, so that the other datasets build first.
+rule refused_dataset:
+    output:
+        REFUSED_LOGS / "{refused}.refused",
+    log:
+        REFUSED_LOGS / "{refused}.log",
+    conda:
+        "../envs/casa.yaml"
+    params:
+        reason=lambda wildcards: shlex.quote(REFUSED[wildcards.refused]),
+    shell:
+        "printf '%s\\n' {params.reason} | tee {log} >&2; exit 1"

@@ -345,7 +345,7 @@ case("csv_unknown_column", (ERROR, "unknown-column"))(
 )
 
 
-@case("csv_tab_separated", (ERROR, "required-column"))
+@case("csv_tab_separated", (ERROR, "csv-format"))
 def _tabs(folder, outside):
     path = folder / CSV
     path.write_bytes(path.read_bytes().replace(b",", b"\t"))
