@@ -18,7 +18,7 @@ import pandas as pd
 
 from casa_core.assist import tasks
 from casa_core.calibration.summaries import SUMMARIES, trial_summaries
-from casa_core.io import check_paths
+from casa_core.io import FileCheck, check_paths
 from casa_core.io.contract import NOT_OWN_BEHAVIOUR, TRIAL_FLAGS
 from casa_core.scene import Scene
 
@@ -92,21 +92,7 @@ def read_people(raw_dir: Path | str, scene: Scene, *, max_duration: float) -> Pe
     """
     root = Path(raw_dir)
     name = root.resolve().name
-    checks = check_paths([root])
-    errors = [problem for check in checks for problem in check.errors]
-    if errors:
-        listed = "\n".join(f"  {problem}" for problem in errors[:10])
-        raise CalibrationInputError(
-            f"dataset {str(root)!r}: {len(errors)} problem(s); `casa validate` lists them all:\n"
-            f"{listed}"
-        )
-    logs = [check for check in checks if check.kind == "trial" and check.ok]
-    human = [check for check in logs if check.meta and check.meta["source"] == "human"]
-    if not human:
-        raise CalibrationInputError(
-            f"dataset {str(root)!r}: no trial with source 'human' among its {len(logs)} "
-            "trial log(s); calibration fits the operator model to people's trials"
-        )
+    human = _human_logs(root)
     warnings = []
     kept, rows = [], []
     dt = scene.teleop.dt
@@ -114,17 +100,9 @@ def read_people(raw_dir: Path | str, scene: Scene, *, max_duration: float) -> Pe
     for check in sorted(human, key=lambda c: str(c.file)):
         meta, frame = check.meta, check.frame
         assert meta is not None and frame is not None
-        excluded = [flag for flag in meta.get("flags", ()) if flag in NOT_OWN_BEHAVIOUR]
-        if excluded:
-            warnings.append(
-                f"{check.file}: left out, flagged {excluded[0]}: {TRIAL_FLAGS[excluded[0]]}"
-            )
-            continue
-        if meta["phase"] not in SIMULATED_PHASES:
-            warnings.append(
-                f"{check.file}: left out, phase {meta['phase']!r} ran with intents learned "
-                "from this person's demonstrations, which the simulator does not have"
-            )
+        why = _left_out(meta)
+        if why is not None:
+            warnings.append(f"{check.file}: left out, {why}")
             continue
         task = meta["task"]
         if task not in intended:
@@ -151,3 +129,39 @@ def read_people(raw_dir: Path | str, scene: Scene, *, max_duration: float) -> Pe
         )
     columns = ["participant", "task", "method", *SUMMARIES]
     return People(name, Design(tuple(kept)), pd.DataFrame(rows, columns=columns), tuple(warnings))
+
+
+def _human_logs(root: Path) -> list[FileCheck]:
+    """The checks of the folder's valid trial logs whose source is ``human``.
+
+    Raises :class:`CalibrationInputError` if any file is invalid or none is human.
+    """
+    checks = check_paths([root])
+    errors = [problem for check in checks for problem in check.errors]
+    if errors:
+        listed = "\n".join(f"  {problem}" for problem in errors[:10])
+        raise CalibrationInputError(
+            f"dataset {str(root)!r}: {len(errors)} problem(s); `casa validate` lists them all:\n"
+            f"{listed}"
+        )
+    logs = [check for check in checks if check.kind == "trial" and check.ok]
+    human = [check for check in logs if check.meta and check.meta["source"] == "human"]
+    if not human:
+        raise CalibrationInputError(
+            f"dataset {str(root)!r}: no trial with source 'human' among its {len(logs)} "
+            "trial log(s); calibration fits the operator model to people's trials"
+        )
+    return human
+
+
+def _left_out(meta: dict) -> str | None:
+    """Why the simulator cannot run a trial again like the person did, or None."""
+    excluded = [flag for flag in meta.get("flags", ()) if flag in NOT_OWN_BEHAVIOUR]
+    if excluded:
+        return f"flagged {excluded[0]}: {TRIAL_FLAGS[excluded[0]]}"
+    if meta["phase"] not in SIMULATED_PHASES:
+        return (
+            f"phase {meta['phase']!r} ran with intents learned from this person's "
+            "demonstrations, which the simulator does not have"
+        )
+    return None

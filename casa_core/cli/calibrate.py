@@ -76,15 +76,7 @@ def register(commands) -> None:
 
 
 def _calibrate(args) -> int:
-    from tqdm import tqdm
-
-    from casa_core.calibration.calibrate import calibrate, population_document
-    from casa_core.calibration.design import CalibrationInputError, read_people
-    from casa_core.calibration.simulator import Simulator
     from casa_core.config import DEFAULT_CONFIG, load_config
-    from casa_core.figures.calibration import plot_predictive
-    from casa_core.io.atomic import atomic_paths, frame_to_csv_text
-    from casa_core.io.population import write_population
     from casa_core.scene import load_scene
     from casa_core.study.settings import StudySettings
 
@@ -99,13 +91,42 @@ def _calibrate(args) -> int:
     scene_path = dataset_scene(args.dataset, args.scene)
     scene_name = scene_path or "config/scene.yaml (the package's)"
     scene = load_scene(scene_path)
+    people = _read_people(args, scene, settings)
+    if people is None:
+        return 2
+    result = _fit(args, people, scene, scene_name, settings)
+    if result is None:
+        return 2
+    table, figure = _write(out, result, people, settings, args.seed)
+    inside = result.predictive["inside"].mean()
+    print(
+        f"casa calibrate: {inside:.0%} of the people's cell summaries inside the fitted "
+        f"model's 90% interval -> {out}, {table}, {figure}"
+    )
+    return 0
+
+
+def _read_people(args, scene, settings):
+    """The dataset's people, their warnings said; None (said why) if they cannot be read."""
+    from casa_core.calibration.design import CalibrationInputError, read_people
+
     try:
         people = read_people(args.dataset, scene, max_duration=settings.max_duration)
     except CalibrationInputError as error:
         print(f"casa calibrate: {error}", file=sys.stderr)
-        return 2
+        return None
     for warning in people.warnings:
         print(f"casa calibrate: warning: {warning}", file=sys.stderr)
+    return people
+
+
+def _fit(args, people, scene, scene_name, settings):
+    """The fitted population, with a progress bar; None (said why) if the fit fails."""
+    from tqdm import tqdm
+
+    from casa_core.calibration.calibrate import calibrate
+    from casa_core.calibration.simulator import Simulator
+
     design = people.design
     print(
         f"casa calibrate: {len(design.trials)} human trial(s) of {len(design.participants)} "
@@ -119,7 +140,7 @@ def _calibrate(args) -> int:
     )
     with tqdm(total=args.simulations + args.predictive, unit="dataset", file=sys.stderr) as bar:
         try:
-            result = calibrate(
+            return calibrate(
                 people,
                 simulator,
                 simulations=args.simulations,
@@ -134,8 +155,17 @@ def _calibrate(args) -> int:
                 f"casa calibrate: dataset {args.dataset} in scene {scene_name}: {error}",
                 file=sys.stderr,
             )
-            return 2
-    document = population_document(result, operator=settings.operator, seed=args.seed)
+            return None
+
+
+def _write(out: Path, result, people, settings, seed: int) -> tuple[Path, Path]:
+    """Write the population file, its predictive table and figure together; their paths."""
+    from casa_core.calibration.calibrate import population_document
+    from casa_core.figures.calibration import plot_predictive
+    from casa_core.io.atomic import atomic_paths, frame_to_csv_text
+    from casa_core.io.population import write_population
+
+    document = population_document(result, operator=settings.operator, seed=seed)
     table = out.with_name(f"{out.stem}_predictive.csv")
     figure = out.with_name(f"{out.stem}_predictive.png")
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -145,9 +175,4 @@ def _calibrate(args) -> int:
         plot_predictive(
             result.predictive, figure_tmp, title=f"{people.dataset}: posterior predictive"
         )
-    inside = result.predictive["inside"].mean()
-    print(
-        f"casa calibrate: {inside:.0%} of the people's cell summaries inside the fitted "
-        f"model's 90% interval -> {out}, {table}, {figure}"
-    )
-    return 0
+    return table, figure

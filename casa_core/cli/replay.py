@@ -61,6 +61,13 @@ def register(commands) -> None:
     )
     command.add_argument("--out", required=True, metavar="DIR", help="folder of the tables")
     command.add_argument("--figures", metavar="DIR", help="folder of the figures (default: --out)")
+    _add_settings(command)
+    _add_selection(command)
+    command.set_defaults(func=_replay)
+
+
+def _add_settings(command) -> None:
+    """Add the inference settings a trial is replayed under (default: the trial's own)."""
     command.add_argument(
         "--preset",
         choices=vocabulary.REPLAY_PRESETS,
@@ -95,6 +102,10 @@ def register(commands) -> None:
         "a trial's participant serves that participant's trials); default: the intents the "
         "dataset keeps in the trial's participant folder (docs/replay.md)",
     )
+
+
+def _add_selection(command) -> None:
+    """Add the options of the scene and of which trials found in folders are replayed."""
     command.add_argument(
         "--scene",
         metavar="YAML",
@@ -110,7 +121,6 @@ def register(commands) -> None:
     command.add_argument(
         "--allow-invalid", action="store_true", help="list invalid logs in replay.csv and go on"
     )
-    command.set_defaults(func=_replay)
 
 
 def _replay(args) -> int:

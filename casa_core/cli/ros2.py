@@ -31,6 +31,12 @@ def register(commands) -> None:
         ),
     )
     nodes = command.add_subparsers(dest="node", metavar="NODE", required=True)
+    _add_sim(nodes)
+    _add_assist(nodes)
+
+
+def _add_sim(nodes) -> None:
+    """Add ``casa ros2 sim``: the simulated arm's node."""
     sim = nodes.add_parser(
         "sim",
         help="the pybullet JACO behind joint_states and velocity_controller/commands",
@@ -43,6 +49,10 @@ def register(commands) -> None:
     scene_option(sim)
     _common(sim)
     sim.set_defaults(func=_sim)
+
+
+def _add_assist(nodes) -> None:
+    """Add ``casa ros2 assist``: the assistant's node, which records the trial."""
     assist = nodes.add_parser(
         "assist",
         help="the assistant on joint_states and cmd_vel; blended joint velocities out; "
@@ -96,6 +106,7 @@ def register(commands) -> None:
 
 
 def _common(command) -> None:
+    """Add the options both nodes take: how long they run and the topics' names."""
     command.add_argument(
         "--duration",
         type=positive_float,

@@ -44,6 +44,24 @@ def register(commands) -> None:
         metavar="INDEX",
         help="1-based participant number",
     )
+    _add_learning_tables(command)
+    command.add_argument(
+        "--out", required=True, help="folder (before, after; protocol: the after one) or CSV"
+    )
+    command.add_argument(
+        "--before", help="the participant's before-learning folder (protocol: written)"
+    )
+    command.add_argument("--task", choices=vocabulary.UNKNOWN_TASKS, help="learn: task")
+    command.add_argument(
+        "--library",
+        help="learn/after: the participant's intent library; protocol: the folder in which "
+        "each unknown task's intent goes to its own <task> folder",
+    )
+    command.set_defaults(func=_simulate)
+
+
+def _add_learning_tables(command) -> None:
+    """Add the options of the learn rows and their training times, per unknown task."""
     tasks = " ".join(vocabulary.UNKNOWN_TASKS)
     command.add_argument(
         "--rows",
@@ -63,19 +81,6 @@ def register(commands) -> None:
         "--timing",
         help="learn: the CSV of its measured training time; learning-table: the timing table",
     )
-    command.add_argument(
-        "--out", required=True, help="folder (before, after; protocol: the after one) or CSV"
-    )
-    command.add_argument(
-        "--before", help="the participant's before-learning folder (protocol: written)"
-    )
-    command.add_argument("--task", choices=vocabulary.UNKNOWN_TASKS, help="learn: task")
-    command.add_argument(
-        "--library",
-        help="learn/after: the participant's intent library; protocol: the folder in which "
-        "each unknown task's intent goes to its own <task> folder",
-    )
-    command.set_defaults(func=_simulate)
 
 
 #: The options each stage needs besides --out.

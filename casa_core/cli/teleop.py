@@ -26,10 +26,6 @@ def register(commands) -> None:
             "casa teleop --task known_goal --method CASA --participant p01 --out data/raw/mine/p01"
         ),
     )
-    # The model's defaults, written once in the assistant.
-    from casa_core.assist.presets import DEFAULT_PRESET
-    from casa_core.defaults import DEMONSTRATIONS, EPSILON
-
     trial_options(command)
     scene_option(command)
     command.add_argument(
@@ -45,6 +41,16 @@ def register(commands) -> None:
         metavar="SECONDS",
         help="end the trial after this long, done or not (default %(default)g)",
     )
+    _add_assistant_options(command)
+    command.set_defaults(func=_teleop)
+
+
+def _add_assistant_options(command) -> None:
+    """Add the options of the assistant: its intents, demonstrations and inference."""
+    # The model's defaults, written once in the assistant.
+    from casa_core.assist.presets import DEFAULT_PRESET
+    from casa_core.defaults import DEMONSTRATIONS, EPSILON
+
     command.add_argument(
         "--intent",
         action="append",
@@ -80,7 +86,6 @@ def register(commands) -> None:
         help="what inference observes, over the preset's choice: the user's commanded motion "
         "or the arm's executed motion, the robot's share included",
     )
-    command.set_defaults(func=_teleop)
 
 
 def _teleop(args) -> int:

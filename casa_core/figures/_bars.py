@@ -152,56 +152,72 @@ def draw_grouped_bars(
             values = rows[value].to_numpy(dtype=float)
             mean, se = mean_se(values)
             x = gx + offset
-            colour = style.METHOD_COLOURS[condition]
-            ax.bar(
-                x,
-                mean,
-                bar_width * 0.9,
-                color=colour,
-                edgecolor="0.15",
-                linewidth=0.5,
-                label=condition,
-                zorder=2,
-            )
-            ax.errorbar(
-                x, mean, yerr=se, color="0.1", capsize=2, elinewidth=0.9, capthick=0.9, zorder=4
-            )
+            _draw_bar(ax, x, mean, se, bar_width, condition)
             if not show_points:
                 tops[(name, condition)] = (x, mean + se)
                 continue
-            # Participants spread evenly (no random jitter) across half the bar, in
-            # participant order so the same participant sits at the same place.
-            order = np.argsort(rows["participant"].astype(str).to_numpy(), kind="stable")
-            spread = np.linspace(-0.22, 0.22, len(values)) if len(values) > 1 else np.zeros(1)
-            xs, ys = x + spread * bar_width, values[order]
-            flagged = np.zeros(len(values), dtype=bool)
-            if marked is not None:
-                flagged = rows[marked].to_numpy(dtype=float)[order] == 1.0
-            ax.scatter(
-                xs[~flagged],
-                ys[~flagged],
-                s=6,
-                facecolor="white",
-                edgecolor="0.1",
-                linewidth=0.5,
-                zorder=5,
-            )
-            if flagged.any():
-                ax.scatter(
-                    xs[flagged],
-                    ys[flagged],
-                    s=16,
-                    marker="X",
-                    color="black",
-                    edgecolor="white",
-                    linewidth=0.3,
-                    zorder=5,
-                    label=marked_label,
-                )
+            _draw_points(ax, rows, values, x, bar_width, marked, marked_label)
             tops[(name, condition)] = (x, float(np.nanmax([mean + se, *values])))
     ax.set_xticks(range(len(groups)))
     ax.set_xlim(-0.5, len(groups) - 0.5)
     return tops
+
+
+def _draw_bar(ax, x: float, mean: float, se: float, bar_width: float, condition: str) -> None:
+    """Draw one condition's bar at ``x``, in its colour, with its standard error."""
+    colour = style.METHOD_COLOURS[condition]
+    ax.bar(
+        x,
+        mean,
+        bar_width * 0.9,
+        color=colour,
+        edgecolor="0.15",
+        linewidth=0.5,
+        label=condition,
+        zorder=2,
+    )
+    ax.errorbar(x, mean, yerr=se, color="0.1", capsize=2, elinewidth=0.9, capthick=0.9, zorder=4)
+
+
+def _draw_points(
+    ax,
+    rows: pd.DataFrame,
+    values: np.ndarray,
+    x: float,
+    bar_width: float,
+    marked: str | None,
+    marked_label: str,
+) -> None:
+    """Draw the participants' ``values`` over the bar at ``x``; the marked ones as crosses."""
+    # Participants spread evenly (no random jitter) across half the bar, in
+    # participant order so the same participant sits at the same place.
+    order = np.argsort(rows["participant"].astype(str).to_numpy(), kind="stable")
+    spread = np.linspace(-0.22, 0.22, len(values)) if len(values) > 1 else np.zeros(1)
+    xs, ys = x + spread * bar_width, values[order]
+    flagged = np.zeros(len(values), dtype=bool)
+    if marked is not None:
+        flagged = rows[marked].to_numpy(dtype=float)[order] == 1.0
+    ax.scatter(
+        xs[~flagged],
+        ys[~flagged],
+        s=6,
+        facecolor="white",
+        edgecolor="0.1",
+        linewidth=0.5,
+        zorder=5,
+    )
+    if flagged.any():
+        ax.scatter(
+            xs[flagged],
+            ys[flagged],
+            s=16,
+            marker="X",
+            color="black",
+            edgecolor="white",
+            linewidth=0.3,
+            zorder=5,
+            label=marked_label,
+        )
 
 
 def _max_conditions_per_group(points: pd.DataFrame, group: str) -> int:

@@ -213,66 +213,21 @@ def mixedlm(
     terms = [*factors, *([" x ".join(factors)] if interaction and len(factors) == 2 else [])]
     frame = clean(data, dv, [*factors, subject], "mixedlm")
     try:
-        for factor in factors:
-            if len(levels(frame[factor])) < 2:
-                raise Skipped(
-                    f"needs at least 2 levels of {factor!r}, found {levels(frame[factor])}"
-                )
-        n_groups = frame[subject].nunique()
-        if n_groups < 2:
-            raise Skipped(f"needs at least 2 participants, got {n_groups}")
-        require_representable(frame[dv], dv)
-        if frame[dv].var() == 0.0:
-            raise Skipped(f"zero variance: every value of {dv!r} is the same")
-        names = {dv: "y", subject: "g"} | {f: f"f{i}" for i, f in enumerate(factors)}
-        model_frame = frame.rename(columns=names).reset_index(drop=True)
-        for column in ["g", *(f"f{i}" for i in range(len(factors)))]:
-            model_frame[column] = model_frame[column].astype(str)
-        parts = [f"C(f{i})" for i in range(len(factors))]
-        # Per term: (the model with it, the model without it).
-        pairs = {
-            factor: (" + ".join(parts), " + ".join(p for p in parts if p != part) or "1")
-            for factor, part in zip(factors, parts, strict=True)
-        }
-        full = " + ".join(parts)
-        if len(terms) == 3:
-            full = " * ".join(parts)
-            pairs[terms[2]] = (full, " + ".join(parts))
+        n_groups = _require_estimable(frame, dv, factors, subject)
+        model_frame = _model_frame(frame, dv, factors, subject)
+        pairs, full = _nested_models(factors, terms)
         y = model_frame["y"].to_numpy(dtype=float)
         structures = [*_structures(model_frame, len(factors))]
         designs = {f: _design(f, model_frame) for pair in pairs.values() for f in pair}
         fits = {f: _Fit(np.asarray(X), y, structures, reml=False) for f, X in designs.items()}
         X = _design(full, model_frame)
         reml = _Fit(np.asarray(X), y, structures, reml=True)
-        variances = [*reml.variances, reml.scale]
-        tests = {}
-        for name, columns in X.design_info.term_name_slices.items():
-            if name != "Intercept":
-                L = np.eye(X.shape[1])[columns]
-                try:
-                    tests[name] = kenward_roger(
-                        np.asarray(X), y, [*structures, np.eye(len(y))], variances, L
-                    )
-                except np.linalg.LinAlgError:  # a covariance that rounding leaves singular
-                    tests[name] = pd.Series(dict.fromkeys(KR_COLUMNS, np.nan))
+        tests = _kenward_roger_tests(X, y, structures, reml)
     except Skipped as why:
         return pd.concat(
             [skipped_row(MIXED_COLUMNS, str(why), term=t) for t in terms], ignore_index=True
         )
-    labels = ["participant", *(f"participant x {f}" for f in factors if len(factors) == 2)]
-    note = (
-        f"Kenward-Roger F (REML; random intercepts: {', '.join(labels)}); likelihood "
-        "ratio of ML fits beside it"
-    )
-    if not all(fit.converged for fit in [reml, *fits.values()]):
-        note += "; fit did not fully converge"
-    if reml.at_boundary:
-        note += (
-            f"; boundary fit: the variance of {', '.join(labels[i] for i in reml.at_boundary)} "
-            "is estimated at 0 (its stratum merges with the residual)"
-        )
-    if not all(np.isfinite(kr["F"]) for kr in tests.values()):
-        note += "; Kenward-Roger F undefined (no information on a variance component)"
+    note = _note(factors, reml, [*fits.values()], tests)
     rows = []
     for (term, (with_term, without)), coded in zip(pairs.items(), tests, strict=True):
         lrt_df = float(designs[with_term].shape[1] - designs[without].shape[1])
@@ -294,6 +249,81 @@ def mixedlm(
             }
         )
     return pd.DataFrame(rows, columns=[*MIXED_COLUMNS, "note"])
+
+
+def _require_estimable(frame: pd.DataFrame, dv: str, factors: list[str], subject: str) -> int:
+    """The number of participants; raises :class:`Skipped` if the model cannot be fitted."""
+    for factor in factors:
+        if len(levels(frame[factor])) < 2:
+            raise Skipped(f"needs at least 2 levels of {factor!r}, found {levels(frame[factor])}")
+    n_groups = frame[subject].nunique()
+    if n_groups < 2:
+        raise Skipped(f"needs at least 2 participants, got {n_groups}")
+    require_representable(frame[dv], dv)
+    if frame[dv].var() == 0.0:
+        raise Skipped(f"zero variance: every value of {dv!r} is the same")
+    return n_groups
+
+
+def _model_frame(frame: pd.DataFrame, dv: str, factors: list[str], subject: str) -> pd.DataFrame:
+    """The data under the formulas' names: ``y``, ``g`` (participant), ``f0``, ``f1`` (str)."""
+    names = {dv: "y", subject: "g"} | {f: f"f{i}" for i, f in enumerate(factors)}
+    model_frame = frame.rename(columns=names).reset_index(drop=True)
+    for column in ["g", *(f"f{i}" for i in range(len(factors)))]:
+        model_frame[column] = model_frame[column].astype(str)
+    return model_frame
+
+
+def _nested_models(factors: list[str], terms: list[str]) -> tuple[dict[str, tuple[str, str]], str]:
+    """Per term, the formulas of the ML models with and without it; the REML model's formula.
+
+    Main effects are tested in the additive model, the interaction against it.
+    """
+    parts = [f"C(f{i})" for i in range(len(factors))]
+    pairs = {
+        factor: (" + ".join(parts), " + ".join(p for p in parts if p != part) or "1")
+        for factor, part in zip(factors, parts, strict=True)
+    }
+    full = " + ".join(parts)
+    if len(terms) == 3:
+        full = " * ".join(parts)
+        pairs[terms[2]] = (full, " + ".join(parts))
+    return pairs, full
+
+
+def _kenward_roger_tests(X, y: np.ndarray, structures: list[np.ndarray], reml: _Fit) -> dict:
+    """The Kenward-Roger test of each coded term of the REML fit's design ``X``, by name."""
+    variances = [*reml.variances, reml.scale]
+    tests = {}
+    for name, columns in X.design_info.term_name_slices.items():
+        if name != "Intercept":
+            L = np.eye(X.shape[1])[columns]
+            try:
+                tests[name] = kenward_roger(
+                    np.asarray(X), y, [*structures, np.eye(len(y))], variances, L
+                )
+            except np.linalg.LinAlgError:  # a covariance that rounding leaves singular
+                tests[name] = pd.Series(dict.fromkeys(KR_COLUMNS, np.nan))
+    return tests
+
+
+def _note(factors: list[str], reml: _Fit, ml_fits: list[_Fit], tests: dict) -> str:
+    """The rows' note: the test and random effects, and any fit not converged or at 0."""
+    labels = ["participant", *(f"participant x {f}" for f in factors if len(factors) == 2)]
+    note = (
+        f"Kenward-Roger F (REML; random intercepts: {', '.join(labels)}); likelihood "
+        "ratio of ML fits beside it"
+    )
+    if not all(fit.converged for fit in [reml, *ml_fits]):
+        note += "; fit did not fully converge"
+    if reml.at_boundary:
+        note += (
+            f"; boundary fit: the variance of {', '.join(labels[i] for i in reml.at_boundary)} "
+            "is estimated at 0 (its stratum merges with the residual)"
+        )
+    if not all(np.isfinite(kr["F"]) for kr in tests.values()):
+        note += "; Kenward-Roger F undefined (no information on a variance component)"
+    return note
 
 
 __all__ = ["BOUNDARY_RATIO", "mixedlm"]

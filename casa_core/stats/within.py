@@ -87,38 +87,8 @@ def rm_anova(
     frame = clean(data, dv, [*factors, subject], "rm_anova")
     terms = [*factors, *([" * ".join(factors)] if len(factors) == 2 else [])]
     try:
-        for factor in factors:
-            if len(levels(frame[factor])) < 2:
-                raise Skipped(
-                    f"needs at least 2 levels of {factor!r}, found {levels(frame[factor])}"
-                )
-        cells, note = complete_cells(frame, dv, factors, subject)
-        n = cells[subject].nunique()
-        if n < 2:
-            # Said with the whole rule, so that the note names the number the test needs.
-            needed = participants_needed(frame, factors)
-            raise Skipped(f"needs at least {needed} participants with every condition, got {n}")
-        require_more_participants(frame, factors, terms, n)
-        require_representable(cells[dv], dv)
-        if equal_to_rounding(cells[dv]):
-            raise Skipped(f"zero variance: every value of {dv!r} is the same")
-        if no_error_variance(cells, dv, factors, subject):
-            raise Skipped(
-                "no error variance: every participant differs between the conditions by the "
-                "same amount, so F is undefined"
-            )
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # pingouin 0.7 triggers pandas 3.1 deprecations
-            table = pingouin.rm_anova(
-                # A private name: pingouin melts the cells into a column named after dv,
-                # which fails when dv is also the name of a condition.
-                data=cells.rename(columns={dv: _DV}),
-                dv=_DV,
-                within=factors if len(factors) > 1 else factors[0],
-                subject=subject,
-                correction=True,
-                detailed=False,
-            )
+        cells, note, n = _complete_participants(frame, dv, factors, subject, terms)
+        table = _pingouin_rm_anova(cells, dv, factors, subject)
     except Skipped as why:
         return pd.concat(
             [skipped_row(RM_COLUMNS, str(why), term=t) for t in terms], ignore_index=True
@@ -147,6 +117,52 @@ def rm_anova(
             }
         )
     return pd.DataFrame(rows, columns=[*RM_COLUMNS, "note"])
+
+
+def _complete_participants(
+    frame: pd.DataFrame, dv: str, factors: list[str], subject: str, terms: list[str]
+) -> tuple[pd.DataFrame, str, int]:
+    """The cell means of the participants with every cell, the note, their number.
+
+    Raises :class:`Skipped` where the ANOVA is not defined on them.
+    """
+    for factor in factors:
+        if len(levels(frame[factor])) < 2:
+            raise Skipped(f"needs at least 2 levels of {factor!r}, found {levels(frame[factor])}")
+    cells, note = complete_cells(frame, dv, factors, subject)
+    n = cells[subject].nunique()
+    if n < 2:
+        # Said with the whole rule, so that the note names the number the test needs.
+        needed = participants_needed(frame, factors)
+        raise Skipped(f"needs at least {needed} participants with every condition, got {n}")
+    require_more_participants(frame, factors, terms, n)
+    require_representable(cells[dv], dv)
+    if equal_to_rounding(cells[dv]):
+        raise Skipped(f"zero variance: every value of {dv!r} is the same")
+    if no_error_variance(cells, dv, factors, subject):
+        raise Skipped(
+            "no error variance: every participant differs between the conditions by the "
+            "same amount, so F is undefined"
+        )
+    return cells, note, n
+
+
+def _pingouin_rm_anova(
+    cells: pd.DataFrame, dv: str, factors: list[str], subject: str
+) -> pd.DataFrame:
+    """pingouin's table of the cell means: one row per term, sphericity corrected."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # pingouin 0.7 triggers pandas 3.1 deprecations
+        return pingouin.rm_anova(
+            # A private name: pingouin melts the cells into a column named after dv,
+            # which fails when dv is also the name of a condition.
+            data=cells.rename(columns={dv: _DV}),
+            dv=_DV,
+            within=factors if len(factors) > 1 else factors[0],
+            subject=subject,
+            correction=True,
+            detailed=False,
+        )
 
 
 __all__ = ["rm_anova", "mixedlm", "friedman", "wilcoxon_holm", "holm"]
