@@ -39,6 +39,7 @@ def log_likelihood(subopt, beta, t, k):
 
     Examples
     --------
+    >>> import numpy as np
     >>> round(log_likelihood(0.0, 2 * np.pi, t=3, k=7), 12)
     0.0
     """
@@ -67,6 +68,7 @@ def posterior(log_likelihoods):
 
     Examples
     --------
+    >>> import numpy as np
     >>> posterior([-1000.0, -1000.0 - np.log(3)])
     array([0.75, 0.25])
     """
