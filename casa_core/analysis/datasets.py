@@ -19,9 +19,11 @@ raw files give the same bytes. Paths in the tables are relative to the dataset f
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from casa_core.analysis import metrics
@@ -75,6 +77,7 @@ STEP_COLUMNS = (
     "intent",
     "beta",
     "belief",
+    "distance",
     "dataset",
     "trial",
 )
@@ -228,7 +231,7 @@ def _trials_and_steps(
                 "flags": " ".join(meta.get("flags", ())),
             }
         )
-        step_parts.append(_steps(frame, condition, dataset, trial))
+        step_parts.append(_steps(frame, condition, dataset, trial, goals=scene.goals))
     trials = pd.DataFrame(rows, columns=[c for c in TRIAL_COLUMNS if "relative" not in c])
     trials["relative_effort"] = metrics.relative_effort(trials, "effort")
     trials["relative_effort_ticks"] = metrics.relative_effort(trials, "effort_ticks")
@@ -246,8 +249,14 @@ def _inference(meta: dict) -> dict:
     return {key: settings.get(key, "") for key in ("preset", "evidence")}
 
 
-def _steps(frame: pd.DataFrame, condition: dict, dataset: str, trial: str) -> pd.DataFrame:
-    """The long per-tick table of one trial: one row per tick and intent."""
+def _steps(
+    frame: pd.DataFrame, condition: dict, dataset: str, trial: str, *, goals: Mapping
+) -> pd.DataFrame:
+    """The long per-tick table of one trial: one row per tick and intent.
+
+    ``distance`` is the logged point's distance to the intent's goal where ``goals`` (the
+    scene's, at the point the trial logs) names it, else NaN.
+    """
     names = []
     for column in frame.columns:
         prefix, _, name = column.partition(":")
@@ -262,11 +271,21 @@ def _steps(frame: pd.DataFrame, condition: dict, dataset: str, trial: str) -> pd
         for quantity in INTENT_PREFIXES:
             column = f"{quantity}:{name}"
             part[quantity] = frame[column] if column in frame.columns else float("nan")
+        part["distance"] = _distance(frame, goals.get(name))
         parts.append(part)
     steps = pd.concat(parts, ignore_index=True)
     for key, value in {**condition, "dataset": dataset, "trial": trial}.items():
         steps[key] = value
     return steps
+
+
+def _distance(frame: pd.DataFrame, goal) -> np.ndarray | float:
+    """Per tick, the distance from the logged ``x, y, z`` to ``goal``; NaN without one."""
+    if goal is None:
+        return float("nan")
+    d = frame[["x", "y", "z"]].to_numpy(dtype=float) - np.asarray(goal, dtype=float)
+    # Summed in a fixed order: the same bytes on every CPU.
+    return np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
 
 
 def _likert(checks: list[FileCheck], trials: pd.DataFrame, dataset: str) -> pd.DataFrame:

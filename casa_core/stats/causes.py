@@ -67,16 +67,19 @@ def above_epsilon(steps: pd.DataFrame, epsilon: float) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Columns ``trial, intent, seconds, peak, duration``: the time above epsilon, the
-        highest beta_hat and the trial's length (its ticks' lengths summed).
+        Columns ``trial, intent, seconds, peak, duration, nearest``: the time above
+        epsilon, the highest beta_hat, the trial's length (its ticks' lengths summed) and
+        the arm's least distance to the intent's goal (NaN where ``steps`` has no
+        ``distance`` for it).
 
     Examples
     --------
     >>> steps = pd.DataFrame({"trial": "a", "t": [0.0, 0.5, 1.0], "intent": "green",
-    ...                       "beta": [0.0, 1.5, 2.0]})
+    ...                       "beta": [0.0, 1.5, 2.0], "distance": [0.3, 0.2, 0.25]})
     >>> above_epsilon(steps, 1.0).iloc[0].to_dict()
-    {'trial': 'a', 'intent': 'green', 'seconds': 1.0, 'peak': 2.0, 'duration': 1.5}
+    {'trial': 'a', 'intent': 'green', 'seconds': 1.0, 'peak': 2.0, 'duration': 1.5, 'nearest': 0.2}
     """
+    columns = ["trial", "intent", "seconds", "peak", "duration", "nearest"]
     rows = []
     for trial, part in steps.groupby("trial", sort=True):
         ticks = np.sort(part["t"].unique())
@@ -85,18 +88,21 @@ def above_epsilon(steps: pd.DataFrame, epsilon: float) -> pd.DataFrame:
         length = dict(zip(ticks, np.append(gaps, last), strict=True))
         for intent, mine in part.dropna(subset=["beta"]).groupby("intent", sort=True):
             above = mine[mine["beta"] > epsilon]
+            distance = mine["distance"] if "distance" in mine.columns else pd.Series(np.nan)
             rows.append(
                 dict(trial=trial, intent=intent,
                      seconds=float(sum(length[t] for t in above["t"])),
-                     peak=float(mine["beta"].max()), duration=float(sum(length.values())))
+                     peak=float(mine["beta"].max()), duration=float(sum(length.values())),
+                     nearest=float(distance.min()))
             )  # fmt: skip
-    return pd.DataFrame(rows, columns=["trial", "intent", "seconds", "peak", "duration"])
+    return pd.DataFrame(rows, columns=columns)
 
 
 def c2_cause(
     steps: pd.DataFrame, lost: pd.DataFrame, kept: int, *, epsilon: float, thresholds
 ) -> str:
-    """Why C2 is not seen: which intent's beta_hat rose above epsilon, and for how long.
+    """Why C2 is not seen: which intent's beta_hat rose above epsilon, for how long, and
+    how near the arm came to that intent's goal.
 
     ``lost`` holds the CASA trials before learning whose alpha fell below the first of
     ``thresholds`` (``(in control, taken)``: 0.95 and 0.5), one row each with ``trial``;
@@ -104,10 +110,10 @@ def c2_cause(
     second. ``steps`` has a ``trial`` column.
 
     >>> steps = pd.DataFrame({"trial": "a", "t": [0.0, 0.5], "intent": "green",
-    ...                       "beta": [0.0, 2.0]})
+    ...                       "beta": [0.0, 2.0], "distance": [0.4, 0.3]})
     >>> print(c2_cause(steps, pd.DataFrame({"trial": ["a"]}), 0, epsilon=1.0,
     ...                thresholds=(0.95, 0.5)).split(") ")[1].split(". Why")[0])
-    for 0.5 s of trials lasting 1 s, peaking at 2
+    for 0.5 s of trials lasting 1 s, peaking at 2, the arm coming within 0.3 m of its goal
     """
     in_control, taken = thresholds
     said = []
@@ -123,12 +129,21 @@ def c2_cause(
                 f"{in_control} as a known intent's beta_hat rose above epsilon = {epsilon:g} "
                 f"({named}) for {_median(top['seconds'], ' s')} of trials lasting "
                 f"{_median(top['duration'], ' s')}, peaking at {_median(top['peak'])}"
+                + _nearest(top["nearest"])
             )
         if len(lost) > len(top):
             said.append(f"in {len(lost) - len(top)} alpha fell with no beta_hat above epsilon")
     if kept:
         said.append(f"in {kept} PBA left alpha at or above {taken}")
     return f"Cause: {'; '.join(said)}. {link('confidence')}" if said else ""
+
+
+def _nearest(distances: pd.Series) -> str:
+    """The clause on how near the arm came to the goal, where the steps give the distance."""
+    known = distances.dropna()
+    if known.empty:
+        return ""
+    return f", the arm coming within {_median(known, ' m')} of its goal"
 
 
 def c3_cause(frame: pd.DataFrame, met: Mapping[str, bool], *, epsilon: float) -> str:

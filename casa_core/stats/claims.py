@@ -91,7 +91,8 @@ def _range(values) -> str:
 def _steps(steps: pd.DataFrame) -> pd.DataFrame:
     """``steps.csv`` checked, its numbers as numbers and a ``trial`` column."""
     require_columns(steps, [*CONDITION_KEYS, "t", "alpha", "intent", "beta"], "steps table")
-    frame = numeric_columns(steps, ["t", "alpha", "beta"], "steps table")
+    numbers = ["t", "alpha", "beta", *(["distance"] if "distance" in steps.columns else [])]
+    frame = numeric_columns(steps, numbers, "steps table")
     return frame.assign(trial=causes.trial_key(frame))
 
 

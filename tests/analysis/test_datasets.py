@@ -94,6 +94,23 @@ def test_steps_are_long_one_row_per_tick_and_intent(raw):
     assert not steps["method"].eq("NA").any()
 
 
+def test_steps_give_the_distance_to_each_intents_goal(raw):
+    steps = datasets.build_tables(raw, SCENE).steps
+    trial = steps[steps["trial"] == "p01/known_goal_CASA_no_misspecification"]
+    _, frame = read_trial(raw / "p01" / "known_goal_CASA_no_misspecification")
+    for name in ("green", "purple"):
+        mine = trial[trial["intent"] == name].reset_index(drop=True)
+        # Euclid written out: the logged point against the scene's goal.
+        goal = SCENE.goals[name]
+        expected = sum((frame[axis] - goal[i]) ** 2 for i, axis in enumerate("xyz")) ** 0.5
+        pd.testing.assert_series_equal(mine["distance"], expected, check_names=False)
+    # An intent the scene has no goal for (a learned one) has no distance.
+    learned = frame.assign(**{"beta:learned_pour": 1.0})
+    rows = datasets._steps(learned, {}, "pilot", "t", goals=SCENE.goals)
+    assert rows.loc[rows["intent"] == "learned_pour", "distance"].isna().all()
+    assert rows.loc[rows["intent"] == "green", "distance"].notna().all()
+
+
 def test_same_raw_files_give_the_same_bytes(raw, tmp_path):
     for out in ("a", "b"):
         process(raw, tmp_path / out, SCENE)

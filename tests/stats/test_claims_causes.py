@@ -30,17 +30,19 @@ from tests.test_readme import ROOT, slug
 TICKS = np.arange(0.0, 10.5, 0.5)  # 21 ticks of 0.5 s: a trial of 10.5 s
 
 
-def green_crossing(participant, task, method, *, alpha, above) -> pd.DataFrame:
+def green_crossing(participant, task, method, *, alpha, above, nearest=0.1) -> pd.DataFrame:
     """One trial before learning: green's beta_hat 2.0 (above epsilon 1) on ``above``
-    ticks from t = 4 s, else 0.5; purple's 0.2; alpha ``alpha`` from t = 4 s."""
+    ticks from t = 4 s, else 0.5; purple's 0.2; alpha ``alpha`` from t = 4 s. The arm
+    comes within ``nearest`` m of green at t = 5 s (0.1 m farther on every other tick)."""
     rows = []
     for t in TICKS:
         over = 4.0 <= t < 4.0 + 0.5 * above
         for intent, beta in (("green", 2.0 if over else 0.5), ("purple", 0.2)):
+            distance = nearest + 0.1 * (t != 5.0) if intent == "green" else 0.6
             rows.append(
                 dict(participant=participant, task=task, method=method,
                      phase="before_learning", t=t, alpha=alpha if t >= 4.0 else 1.0,
-                     intent=intent, beta=beta, belief=0.5,
+                     intent=intent, beta=beta, belief=0.5, distance=distance,
                      trial=f"{participant}/{task}_{method}")
             )  # fmt: skip
     return pd.DataFrame(rows)
@@ -54,13 +56,27 @@ def test_c2_names_the_intent_above_epsilon_and_for_how_long():
             parts.append(green_crossing(f"p{i}", task, "PBA", alpha=0.1, above=0))
     row = judge(pd.concat(parts, ignore_index=True)).loc["C2"]
     assert row["verdict"] == "differs"
-    # 4 CASA trials; green above epsilon on 6 ticks of 0.5 s = 3 s of 21 ticks = 10.5 s.
+    # 4 CASA trials; green above epsilon on 6 ticks of 0.5 s = 3 s of 21 ticks = 10.5 s,
+    # and the arm 0.1 m from green at its nearest.
     assert row["cause"].startswith(
         "Cause: in 4 trials of CASA before learning alpha fell below 0.95 as a known "
         "intent's beta_hat rose above epsilon = 1 (green in 4) for 3 s of trials lasting "
-        "10.5 s, peaking at 2."
+        "10.5 s, peaking at 2, the arm coming within 0.1 m of its goal."
     )
     assert "#c2-and-c3-a-known-intents-confidence-rises-above-epsilon" in row["cause"]
+
+
+def test_c2_gives_the_median_nearest_approach_over_the_trials():
+    parts = []
+    for i, nearest in enumerate((0.05, 0.15, 0.25)):
+        parts.append(green_crossing(f"p{i}", UNKNOWN[0], "CASA", alpha=0.5, above=6,
+                                    nearest=nearest))  # fmt: skip
+        parts.append(green_crossing(f"p{i}", UNKNOWN[0], "PBA", alpha=0.1, above=0))
+    cause = judge(pd.concat(parts, ignore_index=True)).loc["C2", "cause"]
+    assert ", the arm coming within median 0.15 m of its goal." in cause
+    # Steps without distances (an older steps.csv) leave the clause out.
+    bare = pd.concat(parts, ignore_index=True).drop(columns="distance")
+    assert "coming within" not in judge(bare).loc["C2", "cause"]
 
 
 def test_c2_says_where_pba_left_control_and_holds_has_no_cause():

@@ -186,6 +186,13 @@ def test_a_badly_named_dataset_folder_fails_alone_with_the_rename_hint(repo):
     alone = snakemake(repo, "--dry-run", "--config", "datasets=[lab]")
     assert alone.returncode == 0 and "refused_dataset" not in alone.stdout, alone.stderr
     assert "rename it, e.g. to data/raw/my_data, and run again" in alone.stderr
+    # The refused folder named as the dataset to build: the same hint, not "not a dataset".
+    chosen = snakemake(repo, "--dry-run", "--config", "datasets=[my data]")
+    assert chosen.returncode != 0
+    said = chosen.stdout + chosen.stderr
+    assert "datasets: data/raw/my data is a folder whose name a dataset cannot take" in said
+    assert "rename it, e.g. to data/raw/my_data, and choose datasets=[my_data]" in said
+    assert "is not a dataset" not in said
     # Run: the other dataset is built, the run fails, and says last how to rename.
     targets = ("data/processed/lab/trials.csv", "logs/refused/my_data.refused")
     result = snakemake(repo, *targets)

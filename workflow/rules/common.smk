@@ -130,6 +130,15 @@ def portable_name(name):
 def chosen_datasets():
     """The datasets of the default target: config `datasets`, else every one."""
     unknown = [name for name in config["datasets"] if name not in DATASETS]
+    refused = [name for name in unknown if (RAW / name).is_dir() and name not in GENERATED]
+    if refused:
+        name = refused[0]
+        raise ValueError(
+            f"datasets: data/raw/{name} is a folder whose name a dataset cannot take (it "
+            f"must match {DATASET_NAME.pattern} and not be one of {', '.join(RESERVED)}); "
+            f"rename it, e.g. to data/raw/{portable_name(name)}, and choose "
+            f"datasets=[{portable_name(name)}]"
+        )
     if unknown:
         raise ValueError(
             f"datasets: {', '.join(unknown)} is not a dataset (found: "
