@@ -159,6 +159,7 @@ CASE_STEPS_COLUMNS = (
     "intent",
     "beta",
     "belief",
+    "distance",
 )
 
 #: Columns of a surveys file; ``source`` is optional.
