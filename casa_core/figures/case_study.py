@@ -51,7 +51,9 @@ def prepare_steps(steps: pd.DataFrame, participant: str | None = None) -> tuple[
         If a column is missing, the participant is absent, a value is not a number, or
         one run has two rows for the same time and intent.
     """
-    tables.require_columns(steps, CASE_STEPS_COLUMNS, "steps")
+    # The figure draws every column but the distance.
+    drawn = [column for column in CASE_STEPS_COLUMNS if column != "distance"]
+    tables.require_columns(steps, drawn, "steps")
     names = sorted(steps["participant"].astype(str).unique())
     if not names:
         raise ValueError("steps: the table has no rows")
