@@ -5,6 +5,10 @@ The modules, each with one job:
 - :mod:`~casa_core.bench.suite`: ``casa bench``: every benchmark of the package.
 - :mod:`~casa_core.bench.protocol`: ``casa bench``: one simulated participant's whole
   protocol, and its learning, timed.
+- :mod:`~casa_core.bench.trial`: ``casa bench``: a whole simulated CASA trial, timed, and
+  its pybullet work alone.
+- :mod:`~casa_core.bench.stages`: ``casa bench``: where a trial's and a protocol's CPU
+  time goes.
 """
 
 from casa_core.bench.protocol import (
@@ -12,6 +16,7 @@ from casa_core.bench.protocol import (
     participant_benchmark,
     target_met,
 )
+from casa_core.bench.stages import PROTOCOL_STAGES, StageClock
 from casa_core.bench.suite import (
     SCALING_SIZES,
     WORKSPACE,
@@ -23,12 +28,15 @@ from casa_core.bench.suite import (
     run_benchmarks,
     time_assistance_step,
     time_assistance_steps,
-    trial_realtime_factor,
     untrained_neural_intent,
 )
+from casa_core.bench.trial import TRIAL_SECONDS, trial_physics_cpu_s, trial_realtime_factor
 
 __all__ = [
+    "PROTOCOL_STAGES",
     "SCALING_SIZES",
+    "StageClock",
+    "TRIAL_SECONDS",
     "TARGETS",
     "WORKSPACE",
     "assistance_benchmarks",
@@ -41,6 +49,7 @@ __all__ = [
     "target_met",
     "time_assistance_step",
     "time_assistance_steps",
+    "trial_physics_cpu_s",
     "trial_realtime_factor",
     "untrained_neural_intent",
 ]

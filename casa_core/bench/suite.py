@@ -2,8 +2,8 @@
 
 How long one assistance step takes and how it grows with the intents
 (:func:`assistance_benchmarks`), and how many simulated seconds a whole CASA trial
-runs per second in a simulation kept open (:func:`trial_realtime_factor`);
-:func:`run_benchmarks` runs them all.
+runs per second in a simulation kept open and what multiple of its pybullet work it
+costs (:mod:`casa_core.bench.trial`); :func:`run_benchmarks` runs them all.
 
 One *assistance step* is what the assistant does at an inference step (twice per
 second): :meth:`Assistant.update` with the state reached (prefix costs, optimal
@@ -38,13 +38,11 @@ import numpy as np
 
 from casa_core.assist.assistant import Assistant
 from casa_core.assist.intents import GoalIntent
-from casa_core.assist.tasks import intended_trajectory, task_waypoints
+from casa_core.assist.tasks import intended_trajectory
 from casa_core.bench.protocol import TARGETS, participant_benchmark, target_met
+from casa_core.bench.trial import TRIAL_SECONDS, trial_physics_cpu_s, trial_realtime_factor
 from casa_core.defaults import HORIZON
-from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import REQUIRED_GOALS, Scene
-from casa_core.study.closed_loop import run_trial
-from casa_core.study.key_sources import WaypointKeys
 
 #: Numbers of goal intents of the scaling measurement.
 SCALING_SIZES = (2, 4, 8, 16, 32, 64)
@@ -253,9 +251,13 @@ def format_table(results: dict) -> str:
             f"{'  the same per wall-clock second':<44}"
             f"{results['trial_realtime_factor_wall']:>14.1f}"
         )
+    if "trial_cost_over_physics" in results:
+        lines.append(_row("  trial CPU / its pybullet CPU", results, "trial_cost_over_physics"))
     if "participant_cpu_s" in results:
         lines.append(_row("one participant's protocol (CPU s)", results, "participant_cpu_s"))
         lines.append(_row("  learning one intent (CPU s)", results, "irl_s"))
+    for stage, seconds in results.get("protocol_split_s", {}).items():
+        lines.append(f"{'  protocol: ' + stage + ' (CPU s)':<44}{seconds:>14.2f}")
     return "\n".join(lines + _notes(results, assisting, slope))
 
 
@@ -319,57 +321,6 @@ def untrained_neural_intent(scene: Scene, *, seed: int = 0, planner=None):
     )
 
 
-class _ExpertThenRest(WaypointKeys):
-    """:class:`WaypointKeys` that rests at the last waypoint instead of finishing."""
-
-    def keys(self, t: float, state) -> frozenset[str]:
-        held = super().keys(t, state)
-        self.done = False
-        return held
-
-
-def trial_realtime_factor(
-    scene: Scene, *, duration: float = 15.0, repeats: int = 3, reuse_simulation: bool = True
-) -> tuple[float, float]:
-    """Simulated seconds per second of a whole CASA trial, pybullet included.
-
-    The Unknown Goal task driven by :class:`WaypointKeys` for ``duration`` seconds
-    (the expert rests at the goal once there). By default one simulation, created
-    before the timing, runs every trial, as the simulated protocol, the session runner
-    and replay run theirs (one simulation per stage, reset between trials); with
-    ``reuse_simulation=False`` each trial creates and tears down its own simulation
-    inside the timing (about 25 ms, mostly ``pybullet.connect`` and loading the arm).
-
-    Returns
-    -------
-    (float, float)
-        Medians over ``repeats`` trials of simulated seconds per CPU second of this
-        process (what one core achieves, whatever else runs on the machine) and per
-        wall-clock second.
-    """
-    shared = ArmSimulation(scene) if reuse_simulation else None
-    per_cpu, per_wall = [], []
-    try:
-        for _ in range(repeats):
-            source = _ExpertThenRest(task_waypoints("unknown_goal", scene)[1:])
-            cpu, wall = time.process_time(), time.perf_counter()
-            run_trial(
-                scene,
-                "unknown_goal",
-                "CASA",
-                source,
-                participant="bench",
-                max_duration=duration,
-                sim=shared,
-            )
-            per_cpu.append(duration / (time.process_time() - cpu))
-            per_wall.append(duration / (time.perf_counter() - wall))
-    finally:
-        if shared is not None:
-            shared.close()
-    return float(np.median(per_cpu)), float(np.median(per_wall))
-
-
 def run_benchmarks(
     scene: Scene, *, seed: int = 0, config: dict | None = None, participants=(0, 1, 2)
 ) -> dict:
@@ -378,8 +329,11 @@ def run_benchmarks(
 
     Returns the dict :func:`format_table` prints: ``step_us_goal3``,
     ``step_us_neural1``, ``scaling``, ``trial_realtime_factor`` (per CPU second),
-    ``trial_realtime_factor_wall``, ``trial_realtime_factor_new_sim``; with a config
-    ``participant_cpu_s`` and ``irl_s`` (and their ``_all`` lists); and
+    ``trial_realtime_factor_wall``, ``trial_realtime_factor_new_sim``,
+    ``trial_physics_realtime_factor`` (the trial's pybullet work alone, simulated s per
+    CPU s) and ``trial_cost_over_physics`` (the trial's CPU over that work's); with a
+    config ``participant_cpu_s``, ``irl_s`` (and their ``_all`` lists) and
+    ``protocol_split_s``; and
     ``targets_met``: per key of :data:`~casa_core.bench.protocol.TARGETS`, whether
     its target is met (None if not measured).
     """
@@ -387,6 +341,9 @@ def run_benchmarks(
         scene, lambda: untrained_neural_intent(scene, seed=seed), seed=seed
     )
     factor_cpu, factor_wall = trial_realtime_factor(scene)
+    physics = trial_physics_cpu_s(scene)
+    results["trial_physics_realtime_factor"] = TRIAL_SECONDS / physics
+    results["trial_cost_over_physics"] = (TRIAL_SECONDS / factor_cpu) / physics
     results["trial_realtime_factor"] = factor_cpu
     results["trial_realtime_factor_wall"] = factor_wall
     results["trial_realtime_factor_new_sim"] = trial_realtime_factor(scene, reuse_simulation=False)[
