@@ -13,8 +13,11 @@ def register(commands) -> None:
         description="Print a table and notes on reading it; with --json, also one JSON object "
         "on the last line with step_us_goal3, step_us_neural1, scaling (n_intents, step_us, "
         "assisting), trial_realtime_factor, trial_realtime_factor_wall, "
-        "trial_realtime_factor_new_sim, participant_cpu_s, irl_s (and their _all lists) "
-        "and targets_met (CPU time of one thread or process; see casa_core.bench.suite).",
+        "trial_realtime_factor_new_sim, trial_physics_realtime_factor (the same trial's "
+        "pybullet calls alone), trial_cost_over_physics (the trial's CPU over theirs), "
+        "participant_cpu_s, irl_s (and their _all lists), protocol_split_s (trials, "
+        "learning, logging, rest) and targets_met (CPU time of one thread or process; see "
+        "casa_core.bench.suite).",
         **example("casa bench --json | tail -n 1 > bench.json"),
     )
     command.add_argument("--json", action="store_true", help="print the JSON line last")
