@@ -161,7 +161,9 @@ class NumpyStateCost:
             work = self._buffers[n] = _work_arrays(n, *self._shape, len(self.objects))
         return flat, states.shape[:-1], work
 
-    def _model(self) -> tuple:
+    def _model(
+        self,
+    ) -> tuple[np.ndarray, float, np.ndarray, _kernels.Layers, np.float32, float, float]:
         """The kernels' arguments that describe the cost: objects, features and network."""
         return (
             self.objects,
