@@ -175,45 +175,13 @@ class Scene:
 
     @classmethod
     def from_dict(cls, data: Any, source: str = "scene") -> Scene:
-        """Validate a parsed scene file; ``source`` names it in errors."""
+        """Validate a parsed scene file; ``source`` names it in errors.
+
+        Its sections and keys are checked first (:func:`_sections`), then its values.
+        """
         reader = _Reader(source)
-        top = reader.mapping(
-            data,
-            "",
-            ("start", "goals", "pouring", "teleop"),
-            ("point", *POINTS, "via", "view", "trial_length"),
-        )
-        point = top.get("point", POINTS[0])
-        if point not in POINTS:
-            reader.fail("point", f"must be one of {', '.join(POINTS)}, got {point!r}")
-        if point in top:
-            reader.fail(point, f"the scene's own point ({point}): its goals go in goals")
-        start = reader.mapping(top["start"], "start", ("position", "rot"), ("joints",))
-        if point != POINTS[0] and "joints" not in start:
-            reader.fail("start.joints", f"required at point {point}: the arm starts at its joints")
-        goals = reader.mapping(top["goals"], "goals", None)
-        missing = [name for name in REQUIRED_GOALS if name not in goals]
-        if missing:
-            raise SceneError(
-                f"{source}: goals.{missing[0]}: missing (required: green, purple, red)"
-            )
-        pouring = reader.mapping(top["pouring"], "pouring", ("position", "bowl", "tilt"))
-        teleop = reader.mapping(top["teleop"], "teleop", ("speed", "rot_speed", "dt"), ("mode",))
-        mode = teleop.get("mode", "held")
-        if mode not in TELEOP_MODES:
-            reader.fail("teleop.mode", f"must be one of {', '.join(TELEOP_MODES)}, got {mode!r}")
-        via = reader.mapping(top.get("via", {}), "via", (), TASKS)
-        view = reader.mapping(top.get("view", {}), "view", (), VIEWS)
-        elsewhere = {
-            other: reader.mapping(top[other], other, None) for other in POINTS if other in top
-        }
-        for other, named in elsewhere.items():
-            for name in named:
-                if name not in goals:
-                    reader.fail(f"{other}.{name}", f"not a goal of the scene ({', '.join(goals)})")
-        trial_length = top.get("trial_length")
-        if trial_length is not None:
-            trial_length = reader.number(top, "trial_length", positive=True)
+        parts = _sections(reader, data)
+        start, goals, pouring, teleop = parts.start, parts.goals, parts.pouring, parts.teleop
         return cls(
             start=Start(
                 reader.vector(start, "start.position"),
@@ -232,21 +200,81 @@ class Scene:
                 reader.number(teleop, "teleop.speed", positive=True),
                 reader.number(teleop, "teleop.rot_speed", positive=True),
                 reader.number(teleop, "teleop.dt", positive=True),
-                mode,
+                parts.mode,
             ),
-            point=point,
-            via=MappingProxyType({task: reader.path(via, f"via.{task}") for task in via}),
-            view=MappingProxyType({name: reader.view(view, f"view.{name}") for name in view}),
+            point=parts.point,
+            via=MappingProxyType(
+                {task: reader.path(parts.via, f"via.{task}") for task in parts.via}
+            ),
+            view=MappingProxyType(
+                {name: reader.view(parts.view, f"view.{name}") for name in parts.view}
+            ),
             goals_elsewhere=MappingProxyType(
                 {
                     other: MappingProxyType(
                         {str(name): reader.vector(named, f"{other}.{name}") for name in named}
                     )
-                    for other, named in elsewhere.items()
+                    for other, named in parts.elsewhere.items()
                 }
             ),
-            trial_length=trial_length,
+            trial_length=parts.trial_length,
         )
+
+
+@dataclass(frozen=True)
+class _Sections:
+    """A scene file's sections, their keys checked and their values not yet read."""
+
+    point: str
+    start: dict
+    goals: dict
+    pouring: dict
+    teleop: dict
+    mode: str
+    via: dict
+    view: dict
+    elsewhere: dict  # the goals at the other points, by point
+    trial_length: float | None
+
+
+def _sections(reader: _Reader, data: Any) -> _Sections:
+    """The sections of a parsed scene file: each key known, each required one there."""
+    top = reader.mapping(
+        data,
+        "",
+        ("start", "goals", "pouring", "teleop"),
+        ("point", *POINTS, "via", "view", "trial_length"),
+    )
+    point = top.get("point", POINTS[0])
+    if point not in POINTS:
+        reader.fail("point", f"must be one of {', '.join(POINTS)}, got {point!r}")
+    if point in top:
+        reader.fail(point, f"the scene's own point ({point}): its goals go in goals")
+    start = reader.mapping(top["start"], "start", ("position", "rot"), ("joints",))
+    if point != POINTS[0] and "joints" not in start:
+        reader.fail("start.joints", f"required at point {point}: the arm starts at its joints")
+    goals = reader.mapping(top["goals"], "goals", None)
+    missing = [name for name in REQUIRED_GOALS if name not in goals]
+    if missing:
+        raise SceneError(
+            f"{reader.source}: goals.{missing[0]}: missing (required: green, purple, red)"
+        )
+    pouring = reader.mapping(top["pouring"], "pouring", ("position", "bowl", "tilt"))
+    teleop = reader.mapping(top["teleop"], "teleop", ("speed", "rot_speed", "dt"), ("mode",))
+    mode = teleop.get("mode", "held")
+    if mode not in TELEOP_MODES:
+        reader.fail("teleop.mode", f"must be one of {', '.join(TELEOP_MODES)}, got {mode!r}")
+    via = reader.mapping(top.get("via", {}), "via", (), TASKS)
+    view = reader.mapping(top.get("view", {}), "view", (), VIEWS)
+    elsewhere = {other: reader.mapping(top[other], other, None) for other in POINTS if other in top}
+    for other, named in elsewhere.items():
+        for name in named:
+            if name not in goals:
+                reader.fail(f"{other}.{name}", f"not a goal of the scene ({', '.join(goals)})")
+    trial_length = top.get("trial_length")
+    if trial_length is not None:
+        trial_length = reader.number(top, "trial_length", positive=True)
+    return _Sections(point, start, goals, pouring, teleop, mode, via, view, elsewhere, trial_length)
 
 
 def load_scene(path: Path | str | None = None) -> Scene:

@@ -92,25 +92,19 @@ class Preset:
         return self if evidence is None else replace(self, evidence=evidence)
 
 
+_CASA = Preset(
+    "casa",
+    goal_cost="path_length",
+    goal_scale=COST_PER_METRE,
+    subopt_scale=SUBOPT_SCALE,
+    lam=LAM,
+    evidence="commanded",
+    idle_is_evidence=False,
+)
 PRESETS = {
-    "casa": Preset(
-        "casa",
-        goal_cost="path_length",
-        goal_scale=COST_PER_METRE,
-        subopt_scale=SUBOPT_SCALE,
-        lam=LAM,
-        evidence="commanded",
-        idle_is_evidence=False,
-    ),
-    "original": Preset(
-        "original",
-        goal_cost="path_length",
-        goal_scale=COST_PER_METRE,
-        subopt_scale=SUBOPT_SCALE,
-        lam=LAM,
-        evidence="executed",
-        idle_is_evidence=True,
-    ),
+    "casa": _CASA,
+    # The original's inference: casa's costs, on the executed motion, idle steps included.
+    "original": replace(_CASA, name="original", evidence="executed", idle_is_evidence=True),
     "paper": Preset(
         "paper",
         goal_cost="distance_sum",

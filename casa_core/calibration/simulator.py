@@ -23,8 +23,8 @@ from casa_core.assist.tasks import intended_trajectory
 from casa_core.calibration.design import Design
 from casa_core.calibration.summaries import SUMMARIES, cell_means, trial_summaries
 from casa_core.scene import Scene
-from casa_core.study.closed_loop import run_trial
-from casa_core.study.participants import draw_participants, make_participant
+from casa_core.study.closed_loop import simulated_trial
+from casa_core.study.participants import draw_participants
 from casa_core.study.settings import LOGNORMAL_PARAMETERS, Lognormal, Population
 
 #: The free parameters of the fit: the medians of the population's lognormal parameters.
@@ -78,22 +78,14 @@ class Simulator:
                 params = draw_participants(1, population, rng)[0]
                 for number, planned in enumerate(self.design.of(participant)):
                     reference = intended_trajectory(planned.task, self.scene)
-                    source = make_participant(
-                        params,
-                        reference,
-                        rng=np.random.default_rng([self.seed, draw, person, number + 1]),
-                        tick=self.scene.teleop.dt,
-                        operator=self.operator,
-                        speed=self.scene.teleop.speed,
-                        rot_speed=self.scene.teleop.rot_speed,
-                    )
-                    result = run_trial(
+                    result = simulated_trial(
                         self.scene,
-                        planned.task,
-                        planned.method,
-                        source,
+                        planned,
+                        reference,
+                        params,
+                        np.random.default_rng([self.seed, draw, person, number + 1]),
                         participant=participant,
-                        phase=planned.phase,
+                        operator=self.operator,
                         max_duration=planned.max_duration,
                         sim=sim,
                         inference=self.inference,

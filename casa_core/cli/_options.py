@@ -38,6 +38,18 @@ def trial_options(command) -> None:
     )
 
 
+def learned_intent_option(command) -> None:
+    """``--intent FILE``, repeatable: the learned intents the robot knows besides its own."""
+    command.add_argument(
+        "--intent",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="a learned intent (casa-intent file) the robot also knows; repeatable "
+        "(for the after_learning phase)",
+    )
+
+
 def dataset_scene_option(command, folder: str) -> None:
     """``--scene YAML`` of a command on a dataset ``folder`` (its metavar): see
     :func:`dataset_scene`."""

@@ -10,7 +10,13 @@ from __future__ import annotations
 import sys
 
 from casa_core import vocabulary
-from casa_core.cli._options import example, positive_float, scene_option, trial_options
+from casa_core.cli._options import (
+    example,
+    learned_intent_option,
+    positive_float,
+    scene_option,
+    trial_options,
+)
 from casa_core.ros2.parameters import PARAMETERS
 
 #: What to run when the ROS 2 packages are missing.
@@ -80,14 +86,7 @@ def _add_assist(nodes) -> None:
         default=DEFAULT_PRESET,
         help="the inference settings (docs/departures.md) (default %(default)s)",
     )
-    assist.add_argument(
-        "--intent",
-        action="append",
-        default=[],
-        metavar="FILE",
-        help="a learned intent (casa-intent file) the robot also knows; repeatable "
-        "(for the after_learning phase)",
-    )
+    learned_intent_option(assist)
     assist.add_argument(
         "--param",
         action="append",

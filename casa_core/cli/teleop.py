@@ -7,6 +7,7 @@ import sys
 from casa_core import vocabulary
 from casa_core.cli._options import (
     example,
+    learned_intent_option,
     nonnegative_int,
     positive_float,
     scene_option,
@@ -51,14 +52,7 @@ def _add_assistant_options(command) -> None:
     from casa_core.assist.presets import DEFAULT_PRESET
     from casa_core.defaults import DEMONSTRATIONS, EPSILON
 
-    command.add_argument(
-        "--intent",
-        action="append",
-        default=[],
-        metavar="FILE",
-        help="a learned intent (casa-intent file) the robot also knows; repeatable "
-        "(for the after_learning phase)",
-    )
+    learned_intent_option(command)
     command.add_argument(
         "--demonstrations",
         type=nonnegative_int,

@@ -80,8 +80,7 @@ def arbitration_figure(
     title : str, optional
         First words of the caption.
     setup : str, optional
-        The setup the data come from (e.g. "scene scene.yaml (teleop held)"), on the
-        caption's last line.
+        The setup the data come from: the caption's last line (:func:`.style.setup_line`).
 
     Returns
     -------

@@ -139,8 +139,7 @@ def likert_figure(
         First words of the caption (default "Likert scores"); answers of simulated
         participants add that they are model output.
     setup : str, optional
-        The setup the data come from (e.g. "scene scene.yaml (teleop held)"), on the
-        caption's last line.
+        The setup the data come from: the caption's last line (:func:`.style.setup_line`).
 
     Returns
     -------

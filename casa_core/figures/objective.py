@@ -210,8 +210,7 @@ def objective_figure(
         First words of the caption (default "Objective metrics"); the caption goes on
         with who the participants are (e.g. "simulated participants") and how many.
     setup : str, optional
-        The setup the data come from (e.g. "scene scene.yaml (teleop held)"), on the
-        caption's last line.
+        The setup the data come from: the caption's last line (:func:`.style.setup_line`).
 
     Returns
     -------

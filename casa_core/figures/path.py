@@ -48,8 +48,7 @@ def path_figure(
     title : str, optional
         First words of the caption (e.g. the trial).
     source : str, optional
-        The trial's ``source``; ``"simulated"`` has the caption say the participant is
-        a model.
+        The trial's ``source``; ``"simulated"`` adds :func:`.style.model_note` to the caption.
 
     Returns
     -------

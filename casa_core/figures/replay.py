@@ -46,8 +46,7 @@ def replay_figure(
         The trial's log (``t`` and ``alpha``, one row per control tick): its alpha is
         drawn under the replayed one, as logged.
     source : str, optional
-        The trial's ``source``; ``"simulated"`` has the caption say the participant is
-        a model.
+        The trial's ``source``; ``"simulated"`` adds :func:`.style.model_note` to the caption.
 
     Returns
     -------

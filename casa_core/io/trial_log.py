@@ -376,7 +376,7 @@ def write_surveys(path: Path | str, frame: pd.DataFrame) -> None:
     Raises
     ------
     LogError
-        Listing every problem; nothing is written then.
+        As :func:`write_trial` raises it.
 
     Examples
     --------

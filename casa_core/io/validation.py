@@ -135,6 +135,24 @@ def _valid_frame(cells: pd.DataFrame, meta) -> pd.DataFrame | None:
     return frame[list(cells.columns)]
 
 
+def _check_time(t: pd.Series, file: str, problems: list) -> None:
+    """The rules of the time column: strictly increasing, in range, one tick apart."""
+    if len(t) > 1:
+        not_increasing = t.diff().le(0) & t.notna() & t.shift().notna()
+        if not_increasing.any():
+            problems.append(
+                Problem(
+                    file,
+                    f"column 't', {where_lines(not_increasing)}",
+                    "t-increasing",
+                    "t must be strictly increasing (one row per tick, in order)",
+                )
+            )
+    in_range(t, "t", file, problems, *TIME_RANGE)
+    if not any(p.rule == "t-increasing" for p in problems):
+        check_ticks(t, file, problems)
+
+
 def parse_trial_csv(
     text: str, file: str, *, meta: dict | None = None
 ) -> tuple[pd.DataFrame | None, list[Problem]]:
@@ -202,22 +220,8 @@ def parse_trial_csv(
                         f"intent {name!r} is not in the metadata's intents {intents}",
                     )
                 )
-    if "t" in frame.columns and len(frame) > 1:
-        t = frame["t"]
-        not_increasing = t.diff().le(0) & t.notna() & t.shift().notna()
-        if not_increasing.any():
-            problems.append(
-                Problem(
-                    file,
-                    f"column 't', {where_lines(not_increasing)}",
-                    "t-increasing",
-                    "t must be strictly increasing (one row per tick, in order)",
-                )
-            )
     if "t" in frame.columns:
-        in_range(frame["t"], "t", file, problems, *TIME_RANGE)
-        if not any(p.rule == "t-increasing" for p in problems):
-            check_ticks(frame["t"], file, problems)
+        _check_time(frame["t"], file, problems)
     check_belief_sum(frame, file, problems)
     if "keys" in cells.columns:
         frame["keys"] = cells["keys"]
@@ -234,10 +238,8 @@ def parse_surveys_csv(text: str, file: str) -> tuple[pd.DataFrame | None, list[P
 
     Parameters
     ----------
-    text : str
-        The file's content.
-    file : str
-        Its name, used in problems.
+    text, file : str
+        As in :func:`parse_trial_csv`.
 
     Returns
     -------

@@ -161,12 +161,11 @@ class NumpyStateCost:
             work = self._buffers[n] = _work_arrays(n, *self._shape, len(self.objects))
         return flat, states.shape[:-1], work
 
-    def __call__(self, states) -> np.ndarray:
-        """Per-state costs ``(...)`` of states ``(..., 4)``."""
-        flat, shape, work = self._work(states)
-        values = np.empty(len(flat))
-        _kernels.cost(
-            flat,
+    def _model(
+        self,
+    ) -> tuple[np.ndarray, float, np.ndarray, _kernels.Layers, np.float32, float, float]:
+        """The kernels' arguments that describe the cost: objects, features and network."""
+        return (
             self.objects,
             self.length_scale,
             _BASIS,
@@ -174,26 +173,18 @@ class NumpyStateCost:
             self._slope,
             self.cost_scale,
             self.offset,
-            work,
-            values,
         )
+
+    def __call__(self, states) -> np.ndarray:
+        """Per-state costs ``(...)`` of states ``(..., 4)``."""
+        flat, shape, work = self._work(states)
+        values = np.empty(len(flat))
+        _kernels.cost(flat, *self._model(), work, values)
         return values.reshape(shape)
 
     def value_and_grad(self, states) -> tuple[np.ndarray, np.ndarray]:
         """Per-state costs ``(...)`` and the gradient of their sum in the states ``(..., 4)``."""
         flat, shape, work = self._work(states)
         values, grad = np.empty(len(flat)), np.empty((len(flat), 4))
-        _kernels.cost_and_gradient(
-            flat,
-            self.objects,
-            self.length_scale,
-            _BASIS,
-            self._layers,
-            self._slope,
-            self.cost_scale,
-            self.offset,
-            work,
-            values,
-            grad,
-        )
+        _kernels.cost_and_gradient(flat, *self._model(), work, values, grad)
         return values.reshape(shape), grad.reshape(*shape, 4)

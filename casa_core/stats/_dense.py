@@ -67,12 +67,13 @@ def _cholesky_solve(low: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def matmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a @ b`` for matrices and matrix-vector products.
+    """``a @ b`` for matrices and matrix-vector products, in the compiled loops.
 
     Examples
     --------
-    >>> matmul(np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([1.0, 1.0]))
-    array([3., 7.])
+    >>> matmul(np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([[0.0, 1.0], [1.0, 0.0]]))
+    array([[2., 1.],
+           [4., 3.]])
     """
     a, b = np.ascontiguousarray(a, dtype=float), np.asarray(b, dtype=float)
     if b.ndim == 1:

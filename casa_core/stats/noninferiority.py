@@ -220,18 +220,10 @@ def ratio_non_inferiority(
 
     Parameters
     ----------
-    data : pandas.DataFrame
-        One row per observation.
-    dv, between : str
-        Dependent-variable and group columns.
-    new, reference : str
-        The two levels of ``between`` compared.
+    data, dv, between, new, reference, lower_is_better, alpha
+        As in :func:`non_inferiority`.
     fraction : float
         The margin ``f > 0`` as a fraction of the reference mean.
-    lower_is_better : bool
-        Direction of the metric.
-    alpha : float
-        One-sided significance level, in (0, 1).
     subject : str, optional
         Column identifying participants: the paired form; without it, Welch's.
 

@@ -122,8 +122,7 @@ def summary_markdown(stats: pd.DataFrame, *, dataset: str, left_out: str = "") -
     dataset : str
         The dataset's name, for the title.
     left_out : str, optional
-        What the build left out (:func:`casa_core.stats.descriptives.left_out`), said
-        under the title.
+        As in :func:`casa_core.stats.apa.report_markdown`.
 
     Returns
     -------

@@ -37,6 +37,7 @@ from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import KNOWN_GOALS, Scene
 from casa_core.study.drive import scene_drive
 from casa_core.study.key_sources import KeySource
+from casa_core.study.participants import ParticipantParams, make_participant
 from casa_core.vocabulary import METHODS, POINTS, TASK_PHASES, TRIAL_ARBITRATION
 
 
@@ -208,6 +209,51 @@ def run_trial(
     if seed is not None:
         meta["seed"] = int(seed)
     return TrialResult(meta=meta, frame=pd.DataFrame(rows))
+
+
+def simulated_trial(
+    scene: Scene,
+    planned,
+    reference,
+    params: ParticipantParams,
+    rng: np.random.Generator,
+    *,
+    participant: str,
+    operator: str,
+    max_duration: float,
+    sim: ArmSimulation | None,
+    inference: Preset | str,
+    **options,
+) -> TrialResult:
+    """:func:`run_trial` of ``planned`` (its task, method and phase) by a simulated participant.
+
+    The participant (:func:`~casa_core.study.participants.make_participant`, operator
+    model ``operator``) has ``params``, draws from ``rng`` and follows ``reference``, the
+    task's intended trajectory, at the scene's tick and speeds; ``options`` go to
+    :func:`run_trial`.
+    """
+    teleop = scene.teleop
+    source = make_participant(
+        params,
+        reference,
+        rng=rng,
+        tick=teleop.dt,
+        operator=operator,
+        speed=teleop.speed,
+        rot_speed=teleop.rot_speed,
+    )
+    return run_trial(
+        scene,
+        planned.task,
+        planned.method,
+        source,
+        participant=participant,
+        phase=planned.phase,
+        max_duration=max_duration,
+        sim=sim,
+        inference=inference,
+        **options,
+    )
 
 
 def trial_assistant(

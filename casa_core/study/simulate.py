@@ -27,8 +27,8 @@ from casa_core.io import SURVEYS_NAME, write_surveys
 from casa_core.io.contract import CASE_STEPS_COLUMNS
 from casa_core.scene import Scene
 from casa_core.study import likert, protocol
-from casa_core.study.closed_loop import known_goal_intents, run_trial, trial_intents
-from casa_core.study.participants import ParticipantParams, draw_participants, make_participant
+from casa_core.study.closed_loop import known_goal_intents, simulated_trial, trial_intents
+from casa_core.study.participants import ParticipantParams, draw_participants
 from casa_core.study.settings import Population, StudySettings
 from casa_core.vocabulary import ASSISTED_METHODS, LEARNED_NAMES, UNKNOWN_TASKS
 
@@ -89,24 +89,14 @@ def _params(index: int, settings: StudySettings, params: ParticipantParams | Non
 
 
 def _run(scene, spec, settings: StudySettings, params, rng, pid, sim, **options):
-    reference = intended_trajectory(spec.task, scene)
-    teleop = scene.teleop
-    source = make_participant(
-        params,
-        reference,
-        rng=rng,
-        tick=teleop.dt,
-        operator=settings.operator,
-        speed=teleop.speed,
-        rot_speed=teleop.rot_speed,
-    )
-    return run_trial(
+    return simulated_trial(
         scene,
-        spec.task,
-        spec.method,
-        source,
+        spec,
+        intended_trajectory(spec.task, scene),
+        params,
+        rng,
         participant=pid,
-        phase=spec.phase,
+        operator=settings.operator,
         max_duration=settings.max_duration,
         sim=sim,
         inference=settings.inference,

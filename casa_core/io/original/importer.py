@@ -145,19 +145,13 @@ def _robot_drove(session, frame) -> float | None:
     return travel if travel > ROBOT_TRAVEL else None
 
 
-def _convert(path, name: SessionName, participant: str, target: Path, scene, warnings: list):
-    """The metadata and frame of one session, checked as write_trial will check them;
-    ``warnings`` gets what is imported but said (a session the robot drove)."""
-    session = read_session(path)
-    names = goal_names(name, session.goals)
-    converted = convert_session(
-        session, name.method, names, scene.goals_at("link7") or None, point=scene.point
-    )
-    frame = converted.frame
+def _import_notes(path, name: SessionName, session, converted) -> str:
+    """The trial's ``notes``: where the import took each column from and what it repaired."""
     evidence = "the recorded waypoints" if session.waypoints is not None else "curr_pos"
+    ticks = len(converted.frame)
     notes = (
         f"imported from the original implementation's session file {path.name}: "
-        f"{converted.samples} samples resampled to {len(frame)} ticks of 0.05 s; keys from "
+        f"{converted.samples} samples resampled to {ticks} ticks of 0.05 s; keys from "
         f"joy_cmd; {len(session.steps)} timed inference steps, each held from the tick at or "
         "after its start (inf_start_time), the step after the trial kept in inference_steps; "
         f"alpha recomputed by the {name.method} rule; negative betas written as 0: "
@@ -175,6 +169,19 @@ def _convert(path, name: SessionName, participant: str, target: Path, scene, war
                 "; PBA's most likely goal recomputed by the original's posterior at beta = 1 "
                 f"over {evidence}"
             )
+    return notes
+
+
+def _convert(path, name: SessionName, participant: str, target: Path, scene, warnings: list):
+    """The metadata and frame of one session, checked as write_trial will check them;
+    ``warnings`` gets what is imported but said (a session the robot drove)."""
+    session = read_session(path)
+    names = goal_names(name, session.goals)
+    converted = convert_session(
+        session, name.method, names, scene.goals_at("link7") or None, point=scene.point
+    )
+    frame = converted.frame
+    notes = _import_notes(path, name, session, converted)
     meta = {
         "schema": "casa-trial/1",
         "participant": participant,
