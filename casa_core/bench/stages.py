@@ -10,7 +10,7 @@ to named stages while it is active: it replaces each function, for the duration 
   same calls the trial makes, in the same run) is measured beside the trial's whole
   cost. The ratio is ``trial_cost_over_physics``: 1 would be a trial that costs no more
   than its pybullet work.
-- a protocol's stages: its trials (:func:`casa_core.study.closed_loop.run_trial`), its
+- a protocol's stages: its trials (:func:`casa_core.study.closed_loop.simulated_trial`), its
   learning (:func:`casa_core.study.simulate.learn_from_demonstrations`) and its logging
   (the trial logs written, :func:`casa_core.study.simulate._write`); the rest is what
   the protocol's total leaves.
@@ -30,7 +30,7 @@ from collections.abc import Iterable
 
 #: The protocol's stages: the module and function name of each, and the stage's name.
 PROTOCOL_STAGES = (
-    ("casa_core.study.simulate", "run_trial", "trials"),
+    ("casa_core.study.simulate", "simulated_trial", "trials"),
     ("casa_core.study.simulate", "learn_from_demonstrations", "learning"),
     ("casa_core.study.simulate", "_write", "logging"),
 )
