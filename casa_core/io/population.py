@@ -1,15 +1,17 @@
-"""The operator population file that `casa calibrate` writes (format version 1).
+"""The operator population file that `casa calibrate` writes (format version 2).
 
 A JSON object (docs/calibration.md, "The population file"):
 
 ``format``, ``version``
-    ``"casa-operator-population"`` and ``1``.
+    ``"casa-operator-population"`` and ``2`` (version 1, without intermittent control, is
+    read too).
 ``dataset``, ``operator``, ``fit_methods``, ``seed``, ``simulations``, ``usable_simulations``
     What was fitted, with which operator model, to which methods' trials, and how.
 ``population``
     The population to draw simulated participants from, in the shape of the config's
     ``simulation.population``: each lognormal parameter's ``median`` and ``sigma``, and
-    ``max_keys``.
+    ``max_keys``; intermittent control's ``bout``, ``pause`` and ``planning`` are optional
+    (a file without them gives the operator a bout of 1 s, no pause and no planning).
 ``posterior``
     ``parameters`` (names), ``prior_log_bounds`` (``[low, high]`` of each log-median) and
     ``log_median_samples`` (one row per posterior sample).
@@ -28,9 +30,12 @@ import jsonschema
 
 from casa_core.config import ConfigError
 from casa_core.io.atomic import atomic_write_text
+from casa_core.vocabulary import INTERMITTENT_PARAMETERS
 
 FORMAT = "casa-operator-population"
-VERSION = 1
+#: The versions read (1 has no intermittent control); the last is written.
+VERSIONS = (1, 2)
+VERSION = VERSIONS[-1]
 #: Whom the simulated participants are drawn from when no population file is set.
 CONFIG_POPULATION = "simulation.population of the config"
 LOGNORMAL: tuple[str, ...] = ("reaction_time", "perception_noise", "deadband", "lapse_rate")
@@ -49,7 +54,7 @@ SCHEMA = {
     "required": ["format", "version", "dataset", "operator", "population", "posterior"],
     "properties": {
         "format": {"const": FORMAT},
-        "version": {"const": VERSION},
+        "version": {"enum": list(VERSIONS)},
         "dataset": {"type": "string"},
         "operator": {"enum": ["lookahead", "predictive"]},
         "fit_methods": {"type": "array", "items": {"type": "string"}},
@@ -61,7 +66,7 @@ SCHEMA = {
             "additionalProperties": False,
             "required": [*LOGNORMAL, "max_keys"],
             "properties": {
-                **{name: _LOGNORMAL for name in LOGNORMAL},
+                **{name: _LOGNORMAL for name in (*LOGNORMAL, *INTERMITTENT_PARAMETERS)},
                 "max_keys": {
                     "type": "object",
                     "additionalProperties": False,
