@@ -1,15 +1,14 @@
 """Neural posterior estimation of the operator population (sbi's NPE), and its predictions.
 
 The free parameters are the logarithms of the population's medians
-(:data:`~casa_core.calibration.simulator.PARAMETERS`). Their prior is uniform, fixed
-before any fit was run: over a factor :data:`PRIOR_FACTOR` either side of the study's own
-medians (``simulation.population``), wide enough to hold every value the operator
-literature cites (docs/departures.md, "Simulated operators"), narrow enough to keep the
-operator in the regime where it finishes a trial; for intermittent control, which the
-study's population does not set, over the ranges of :data:`LITERATURE_PRIORS`. NPE (sbi)
-learns the posterior from simulations drawn from the prior, once for all observations (it
-is amortised), which is what makes the parameter-recovery check over many synthetic
-datasets affordable: one training set serves them all.
+(:data:`~casa_core.calibration.simulator.PARAMETERS`). Their prior is uniform over a factor
+:data:`PRIOR_FACTOR` either side of the study's own medians (``simulation.population``),
+fixed before any fit was run: wide enough to hold every value the operator literature
+cites (docs/departures.md, "Simulated operators"), narrow enough to keep the operator in
+the regime where it finishes a trial. NPE (sbi) learns the posterior from simulations
+drawn from the prior, once for all observations (it is amortised), which is what makes
+the parameter-recovery check over many synthetic datasets affordable: one training set
+serves them all.
 """
 
 from __future__ import annotations
@@ -23,13 +22,6 @@ from casa_core.study.settings import Population
 
 #: The prior of each median spans median / PRIOR_FACTOR to median * PRIOR_FACTOR.
 PRIOR_FACTOR = 3.0
-#: The priors of intermittent control's medians, s, whatever the config sets
-#: (docs/departures.md, "Where each operator parameter comes from"): the bout, a factor 3
-#: either side of BOUT (1 s), holding manual control's open-loop intervals of 0.5-1.25 s
-#: (Loram et al. 2011); the pause, from below the refractory period (0.25-0.55 s, van de
-#: Kamp et al. 2013) to seconds of move and wait (Ferrell 1965); planning, a factor 3
-#: either side of the Keystroke-Level Model's M = 1.35 s (Card, Moran & Newell 1980).
-LITERATURE_PRIORS = {"bout": (1 / 3, 3.0), "pause": (0.1, 3.0), "planning": (0.45, 4.05)}
 #: sbi's density estimator: a neural spline flow. On the recovery check's simulations
 #: (docs/calibration.md) sbi's default, a masked autoregressive flow, and a mixture
 #: density network gave 90% intervals covering 72-84% of true values; the spline flow 85-91%.
@@ -47,18 +39,12 @@ def prior_bounds(base: Population) -> np.ndarray:
     --------
     >>> from casa_core.config import DEFAULT_CONFIG, load_config
     >>> base = Population.from_config(load_config(DEFAULT_CONFIG)["simulation"]["population"])
-    >>> np.exp(prior_bounds(base)[[0, -1]]).round(4).tolist()  # reaction time, planning, s
-    [[0.1167, 1.05], [0.45, 4.05]]
+    >>> np.exp(prior_bounds(base)[0]).round(4).tolist()  # reaction time, s
+    [0.1167, 1.05]
     """
+    centre = np.log([getattr(base, name).median for name in PARAMETERS])
     half = np.log(PRIOR_FACTOR)
-    rows: list = []
-    for name in PARAMETERS:
-        if name in LITERATURE_PRIORS:
-            rows.append(np.log(LITERATURE_PRIORS[name]))
-        else:
-            centre = np.log(getattr(base, name).median)
-            rows.append([centre - half, centre + half])
-    return np.array(rows, dtype=float)
+    return np.column_stack([centre - half, centre + half])
 
 
 def draw_prior(bounds: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:

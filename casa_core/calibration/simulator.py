@@ -1,8 +1,7 @@
 """The simulator of `casa calibrate`: a dataset's design run by simulated operators in pybullet.
 
 A candidate population (the operator parameters' medians; their spreads and ``max_keys``
-stay the study's, and intermittent control's spread is :data:`INTERMITTENT_SIGMA` where the
-study sets none) is turned into one simulated participant per person of the design, who
+stay the study's) is turned into one simulated participant per person of the design, who
 runs that person's trials in the same scene, each a closed-loop trial with pybullet
 (:func:`casa_core.study.closed_loop.run_trial`). Every draw comes from
 ``numpy.random.default_rng([seed, draw, person, trial])``, so a simulation does not depend
@@ -27,31 +26,17 @@ from casa_core.scene import Scene
 from casa_core.study.closed_loop import run_trial
 from casa_core.study.participants import draw_participants, make_participant
 from casa_core.study.settings import LOGNORMAL_PARAMETERS, Lognormal, Population
-from casa_core.vocabulary import INTERMITTENT_PARAMETERS
 
-#: The free parameters of the fit: the medians of the population's lognormal parameters,
-#: then those of intermittent control (docs/calibration.md, "What it fits").
-PARAMETERS = LOGNORMAL_PARAMETERS + INTERMITTENT_PARAMETERS
-#: The spread between people of an intermittent-control parameter the study does not set:
-#: that of the config's other times (reaction time 0.25, lapse duration 0.3).
-INTERMITTENT_SIGMA = 0.3
+#: The free parameters of the fit: the medians of the population's lognormal parameters.
+PARAMETERS = LOGNORMAL_PARAMETERS
 
 
 def with_medians(population: Population, medians) -> Population:
-    """``population`` with its lognormal medians replaced, in the order of :data:`PARAMETERS`.
-
-    Examples
-    --------
-    >>> from casa_core.config import DEFAULT_CONFIG, load_config
-    >>> block = load_config(DEFAULT_CONFIG)["simulation"]["population"]
-    >>> fitted = with_medians(Population.from_config(block), [1.0] * len(PARAMETERS))
-    >>> fitted.reaction_time, fitted.pause
-    (Lognormal(median=1.0, sigma=0.25), Lognormal(median=1.0, sigma=0.3))
-    """
-    changed = {}
-    for name, value in zip(PARAMETERS, medians, strict=True):
-        spec = getattr(population, name)
-        changed[name] = Lognormal(float(value), INTERMITTENT_SIGMA if spec is None else spec.sigma)
+    """``population`` with its lognormal medians replaced, in the order of :data:`PARAMETERS`."""
+    changed = {
+        name: Lognormal(float(value), getattr(population, name).sigma)
+        for name, value in zip(PARAMETERS, medians, strict=True)
+    }
     return replace(population, **changed)  # type: ignore[arg-type]
 
 

@@ -6,12 +6,10 @@ at least one of them (docs/calibration.md, "Summaries"):
 ``duration`` (s)
     The trial's last tick: slow reactions and lapses lengthen it.
 ``first_press`` (s)
-    Time of the first tick with a key held (the duration if none is): the reaction time
-    and the planning.
+    Time of the first tick with a key held (the duration if none is): the reaction time.
 ``presses_per_s``
     Key presses (press events, the effort of the paper) per second: the deadband and the
-    noise of perception make an operator press and let go more often, longer pauses and
-    bouts less often.
+    noise of perception make an operator press and let go more often.
 ``keys_held``
     Keys held per tick, on average: how many axes an operator drives at once.
 ``error`` (m)

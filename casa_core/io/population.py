@@ -1,17 +1,15 @@
-"""The operator population file that `casa calibrate` writes (format version 2).
+"""The operator population file that `casa calibrate` writes (format version 1).
 
 A JSON object (docs/calibration.md, "The population file"):
 
 ``format``, ``version``
-    ``"casa-operator-population"`` and ``2`` (version 1, without intermittent control, is
-    read too).
+    ``"casa-operator-population"`` and ``1``.
 ``dataset``, ``operator``, ``fit_methods``, ``seed``, ``simulations``, ``usable_simulations``
     What was fitted, with which operator model, to which methods' trials, and how.
 ``population``
     The population to draw simulated participants from, in the shape of the config's
     ``simulation.population``: each lognormal parameter's ``median`` and ``sigma``, and
-    ``max_keys``; intermittent control's ``bout``, ``pause`` and ``planning`` are optional
-    (a file without them gives the operator a bout of 1 s, no pause and no planning).
+    ``max_keys``.
 ``posterior``
     ``parameters`` (names), ``prior_log_bounds`` (``[low, high]`` of each log-median) and
     ``log_median_samples`` (one row per posterior sample).
@@ -30,12 +28,9 @@ import jsonschema
 
 from casa_core.config import ConfigError
 from casa_core.io.atomic import atomic_write_text
-from casa_core.vocabulary import INTERMITTENT_PARAMETERS
 
 FORMAT = "casa-operator-population"
-#: The versions read (1 has no intermittent control); the last is written.
-VERSIONS = (1, 2)
-VERSION = VERSIONS[-1]
+VERSION = 1
 #: Whom the simulated participants are drawn from when no population file is set.
 CONFIG_POPULATION = "simulation.population of the config"
 LOGNORMAL: tuple[str, ...] = ("reaction_time", "perception_noise", "deadband", "lapse_rate")
@@ -54,7 +49,7 @@ SCHEMA = {
     "required": ["format", "version", "dataset", "operator", "population", "posterior"],
     "properties": {
         "format": {"const": FORMAT},
-        "version": {"enum": list(VERSIONS)},
+        "version": {"const": VERSION},
         "dataset": {"type": "string"},
         "operator": {"enum": ["lookahead", "predictive"]},
         "fit_methods": {"type": "array", "items": {"type": "string"}},
@@ -66,7 +61,7 @@ SCHEMA = {
             "additionalProperties": False,
             "required": [*LOGNORMAL, "max_keys"],
             "properties": {
-                **{name: _LOGNORMAL for name in (*LOGNORMAL, *INTERMITTENT_PARAMETERS)},
+                **{name: _LOGNORMAL for name in LOGNORMAL},
                 "max_keys": {
                     "type": "object",
                     "additionalProperties": False,

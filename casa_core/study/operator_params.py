@@ -18,6 +18,14 @@ from casa_core.vocabulary import INTERMITTENT_PARAMETERS
 
 #: Longest the predictive operator holds keys before it lets go to watch the arm, s.
 BOUT = 1.0
+#: The priors of intermittent control's population medians, s: ranges uniform in log space,
+#: fixed from the literature before any fit (docs/departures.md, "Where each operator
+#: parameter comes from"): the bout a factor 3 either side of BOUT, holding manual
+#: control's open-loop intervals of 0.5-1.25 s (Loram et al. 2011); the pause from below the
+#: refractory duration (0.25-0.55 s, van de Kamp et al. 2013) to seconds of move and wait
+#: (Ferrell 1965); planning a factor 3 either side of the Keystroke-Level Model's
+#: M = 1.35 s (Card, Moran & Newell 1980).
+INTERMITTENT_PRIORS = {"bout": (1 / 3, 3.0), "pause": (0.1, 3.0), "planning": (0.45, 4.05)}
 
 
 @dataclass(frozen=True)
