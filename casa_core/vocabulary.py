@@ -15,6 +15,9 @@ True
 
 from __future__ import annotations
 
+#: The simulated operator's optional parameters of intermittent control, in the order a
+#: participant draws them (config ``simulation.population``, population files).
+INTERMITTENT_PARAMETERS = ("bout", "pause", "planning")
 #: The study's tasks, in the order the protocol runs them (paper, Sec. V-A).
 TASKS = ("familiarization", "known_goal", "unknown_goal", "unknown_skill")
 #: The well-specified task: its goal is one of the robot's known intents.

@@ -2,6 +2,7 @@
 
 - :mod:`~casa_core.study.participants`, :mod:`~casa_core.study.arm_estimate`: simulated
   participants (operator models) and the predictive operator's estimate of the arm;
+  :mod:`~casa_core.study.operator_params`: their parameters, drawn from the population;
 - :mod:`~casa_core.study.key_sources`: scripted key sources and their protocol;
 - :mod:`~casa_core.study.closed_loop`: one trial, pybullet in the loop;
   :mod:`~casa_core.study.drive`: how a tick's keys and the robot's action move the arm, per

@@ -15,8 +15,10 @@ watching, and steers back if the arm is seen to leave.
 Population parameters (fixed before any result was looked at; distributions in
 ``config/config.yaml`` under ``simulation.population``): ``reaction_time`` (s),
 ``perception_noise`` (m), ``deadband`` (m), ``lapse_rate`` (1/s) and ``lapse_duration``
-(s), ``wrong_key`` (probability), ``max_keys``. The expert of the case study has a short
-delay, little noise, no lapses and no wrong keys.
+(s), ``wrong_key`` (probability), ``max_keys``; the predictive operator's intermittent
+control, ``bout``, ``pause`` and ``planning`` (s), which the config may set and the
+default population does not (:mod:`casa_core.study.operator_params`). The expert of the
+case study has a short delay, little noise, no lapses and no wrong keys.
 
 Two operator models share this machinery (config key ``simulation.operator``):
 *lookahead* (:class:`SimulatedParticipant`) steers toward a point :data:`LOOKAHEAD` ahead
@@ -31,7 +33,6 @@ docs/departures.md, "Simulated operators".
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -40,7 +41,10 @@ from casa_core.fixed_order import dot, length
 from casa_core.robot.keys import AXIS_KEYS, keys_to_action
 from casa_core.study import _operator_kernels as _kernels
 from casa_core.study.arm_estimate import ArmEstimate
-from casa_core.study.settings import LOGNORMAL_PARAMETERS, Population
+from casa_core.study.operator_params import BOUT, ParticipantParams, draw_participants
+
+__all__ = ["BOUT", "OPERATORS", "ParticipantParams", "PredictiveParticipant"]
+__all__ += ["SimulatedParticipant", "draw_participants", "make_participant"]
 
 # Rotation error is compared with position error at this many metres per radian.
 ROT_TO_METRES = 0.1
@@ -63,47 +67,8 @@ LEAD_TIME = 0.5
 ESTIMATE_PERIOD = 1.0
 #: Shortest interval from a change of the predictive operator's keys to its next press, s.
 REFRACTORY = 0.25
-#: Longest the predictive operator holds keys before it lets go to watch the arm, s.
-BOUT = 1.0
 _SCALE = np.array([1.0, 1.0, 1.0, ROT_TO_METRES])  # [x, y, z, rot] with rot in metres
 _SCALE_FLOATS = tuple(_SCALE.tolist())
-
-
-@dataclass(frozen=True)
-class ParticipantParams:
-    """One participant's operator parameters (units in the module docstring)."""
-
-    reaction_time: float
-    perception_noise: float
-    deadband: float
-    lapse_rate: float
-    lapse_duration: float
-    wrong_key: float
-    max_keys: int
-
-    def as_dict(self) -> dict:
-        return asdict(self)
-
-
-def draw_participants(
-    n: int, population: Population, rng: np.random.Generator
-) -> list[ParticipantParams]:
-    """Draw ``n`` participants from the population of the study's settings.
-
-    Each parameter is lognormal (:class:`~casa_core.study.settings.Lognormal`) except
-    ``max_keys``, one of its ``values`` drawn with the probabilities ``p``.
-    """
-    drawn = []
-    for _ in range(n):
-        values: dict[str, float] = {}
-        for name in LOGNORMAL_PARAMETERS:
-            spec = getattr(population, name)
-            values[name] = float(spec.median * np.exp(spec.sigma * rng.standard_normal()))
-        values["wrong_key"] = min(values["wrong_key"], 0.5)
-        keys = population.max_keys
-        max_keys = int(rng.choice(keys.values, p=keys.p))
-        drawn.append(ParticipantParams(**values, max_keys=max_keys))
-    return drawn
 
 
 class SimulatedParticipant:
@@ -245,17 +210,27 @@ class PredictiveParticipant(SimulatedParticipant):
     its keys must still add, beyond the drift, to reach within :data:`LEAD_TIME` the point
     of the reference that far ahead of the arm; it holds a key on an axis while that exceeds
     the deadband, and presses no sooner than :data:`REFRACTORY` after its last change of
-    keys. It steers in bouts: after holding keys for ``bout`` seconds it lets go and
-    watches for its reaction time, the soonest it can see what the arm does without its
-    keys (intermittent control). A robot that carries the arm along then shows as drift
-    and saves it keys; one that pulls it away costs it keys.
+    keys. It steers in bouts (intermittent control, move and wait): after holding keys
+    for ``bout`` seconds it lets go and watches for its reaction time, the soonest it can
+    see what the arm does without its keys, and ``pause`` seconds more; whenever it lets
+    go of all its keys it presses again no sooner than ``pause`` later. Its first press
+    comes ``planning`` seconds after its first sight of the arm at the soonest. A robot
+    that carries the arm along then shows as drift and saves it keys; one that pulls it
+    away costs it keys. With ``pause`` and ``planning`` 0 it watches only at a bout's end.
 
     Parameters
     ----------
     speed, rot_speed : float
         What the operator's keys command, m/s and rad/s (the scene's ``teleop``).
-    bout : float, default BOUT
+    bout : float, optional
         The longest it holds keys before watching, s; ``math.inf``: continuous control.
+        Default ``params.bout``.
+    pause : float, optional
+        Seconds it watches after letting go, beyond the reaction time; default
+        ``params.pause``.
+    planning : float, optional
+        Seconds from its first sight of the arm to its first press at the soonest (the
+        time to plan the first move); default ``params.planning``.
     """
 
     def __init__(
@@ -267,12 +242,16 @@ class PredictiveParticipant(SimulatedParticipant):
         tick: float = TICK,
         speed: float = SPEED,
         rot_speed: float = ROT_SPEED,
-        bout: float = BOUT,
+        bout: float | None = None,
+        pause: float | None = None,
+        planning: float | None = None,
     ):
         super().__init__(params, reference, rng=rng, tick=tick)
-        if not bout > 0:
-            raise ValueError(f"bout = {bout} s: the longest bout of keys must be positive")
-        self.bout = float(bout)
+        self.bout, self.pause, self.planning = intermittency(
+            params.bout if bout is None else bout,
+            params.pause if pause is None else pause,
+            params.planning if planning is None else planning,
+        )
         self._times = np.asarray(reference, dtype=float)[:, 0]
         self._speeds = (float(speed), float(rot_speed))
         self._estimate = ArmEstimate(
@@ -292,6 +271,9 @@ class PredictiveParticipant(SimulatedParticipant):
         self._pulled_back = 0.0  # m the drift takes the arm back within LEAD_TIME
 
     def keys(self, t: float, state) -> frozenset[str]:
+        if self.planning and not self._history:
+            # The first tick: no press before the first sight and the planning after it.
+            self._watch_until = t + self.params.reaction_time + self.planning
         self._history.append((t, self._commanded))
         held = super().keys(t, state)
         self._commanded = self._commanded + keys_to_action(held, *self._speeds) * self.tick
@@ -306,7 +288,7 @@ class PredictiveParticipant(SimulatedParticipant):
                 self._bout_from = t
             else:
                 # The bout is over: let go, and watch until the arm without keys is seen.
-                self._watch_until = t + self.params.reaction_time
+                self._watch_until = t + self.params.reaction_time + self.pause
                 self._changed_at = t
                 return frozenset()
         chosen = super()._choose_keys(error, t)
@@ -319,6 +301,8 @@ class PredictiveParticipant(SimulatedParticipant):
         self._changed_at = t
         if chosen and not self._held:
             self._bout_from = t
+        elif not chosen and self.pause:
+            self._watch_until = t + self.pause  # let go: move and wait
         return chosen
 
     def _error(self, perceived: np.ndarray, t: float) -> np.ndarray | None:
@@ -354,6 +338,27 @@ class PredictiveParticipant(SimulatedParticipant):
         return estimate.position + estimate.authority * since + drift * (t - seen_at), drift
 
 
+def intermittency(bout: float, pause: float, planning: float) -> tuple[float, float, float]:
+    """``bout``, ``pause`` and ``planning`` as floats, if valid; else a ValueError naming one.
+
+    Examples
+    --------
+    >>> intermittency(1, 0, 0.5)
+    (1.0, 0.0, 0.5)
+    >>> intermittency(1, -0.1, 0)
+    Traceback (most recent call last):
+    ...
+    ValueError: pause = -0.1 s: the watch after letting go must be finite and >= 0
+    """
+    if not bout > 0:
+        raise ValueError(f"bout = {bout} s: the longest bout of keys must be positive")
+    if not 0 <= pause < np.inf:
+        raise ValueError(f"pause = {pause} s: the watch after letting go must be finite and >= 0")
+    if not 0 <= planning < np.inf:
+        raise ValueError(f"planning = {planning} s: the time to plan must be finite and >= 0")
+    return float(bout), float(pause), float(planning)
+
+
 #: The operator models, by the name of config key ``simulation.operator``.
 OPERATORS = {"lookahead": SimulatedParticipant, "predictive": PredictiveParticipant}
 
@@ -367,13 +372,13 @@ def make_participant(
     operator: str,
     speed: float = SPEED,
     rot_speed: float = ROT_SPEED,
-    bout: float = BOUT,
 ) -> SimulatedParticipant:
     """The participant of operator model ``operator`` (a key of :data:`OPERATORS`).
 
     ``speed`` and ``rot_speed`` are what its keys command (the scene's ``teleop``), which
-    the predictive operator knows; ``bout`` is its longest bout of keys
-    (:class:`PredictiveParticipant`).
+    the predictive operator knows; it steers with the intermittent control of ``params``
+    (``bout``, ``pause``, ``planning``; :class:`PredictiveParticipant`), which the
+    lookahead operator does not have.
 
     Examples
     --------
@@ -395,6 +400,6 @@ def make_participant(
         )
     if operator == "predictive":
         return PredictiveParticipant(
-            params, reference, rng=rng, tick=tick, speed=speed, rot_speed=rot_speed, bout=bout
+            params, reference, rng=rng, tick=tick, speed=speed, rot_speed=rot_speed
         )
     return OPERATORS[operator](params, reference, rng=rng, tick=tick)

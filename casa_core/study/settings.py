@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 from casa_core.assist.presets import Preset, preset
 from casa_core.defaults import DEMONSTRATIONS
+from casa_core.vocabulary import INTERMITTENT_PARAMETERS
 
 #: The population's lognormal parameters, in the config's order (``max_keys`` is not one).
 LOGNORMAL_PARAMETERS = (
@@ -62,7 +63,10 @@ class MaxKeys:
 class Population:
     """The population of simulated participants (``simulation.population`` of the config).
 
-    Units and sources: :mod:`casa_core.study.participants`.
+    Units and sources: :mod:`casa_core.study.participants`. ``bout``, ``pause`` and
+    ``planning`` (:data:`~casa_core.vocabulary.INTERMITTENT_PARAMETERS`) are None when the
+    config does not set them, which gives the operators the defaults of
+    :class:`~casa_core.study.operator_params.ParticipantParams`.
     """
 
     reaction_time: Lognormal
@@ -72,6 +76,9 @@ class Population:
     lapse_duration: Lognormal
     wrong_key: Lognormal
     max_keys: MaxKeys
+    bout: Lognormal | None = None
+    pause: Lognormal | None = None
+    planning: Lognormal | None = None
 
     @classmethod
     def from_config(cls, population: Mapping) -> Population:
@@ -81,13 +88,14 @@ class Population:
         --------
         >>> block = {name: {"median": 1, "sigma": 0.5} for name in LOGNORMAL_PARAMETERS}
         >>> drawn = Population.from_config({**block, "max_keys": {"values": [1], "p": [1]}})
-        >>> drawn.deadband, drawn.max_keys
-        (Lognormal(median=1.0, sigma=0.5), MaxKeys(values=(1,), p=(1.0,)))
+        >>> drawn.deadband, drawn.max_keys, drawn.pause
+        (Lognormal(median=1.0, sigma=0.5), MaxKeys(values=(1,), p=(1.0,)), None)
         """
         keys = population["max_keys"]
         lognormals = {
             name: Lognormal(float(population[name]["median"]), float(population[name]["sigma"]))
-            for name in LOGNORMAL_PARAMETERS
+            for name in (*LOGNORMAL_PARAMETERS, *INTERMITTENT_PARAMETERS)
+            if name in population
         }
         return cls(
             **lognormals,
