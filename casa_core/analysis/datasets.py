@@ -30,7 +30,7 @@ from casa_core.analysis import metrics
 from casa_core.assist import tasks
 from casa_core.io import CONDITION_KEYS, FileCheck, Problem, check_paths
 from casa_core.io.atomic import atomic_paths, frame_to_csv_text, write_csv
-from casa_core.io.contract import INTENT_PREFIXES
+from casa_core.io.contract import CASE_STEPS_COLUMNS, INTENT_PREFIXES
 from casa_core.scene import Scene
 from casa_core.vocabulary import ANSWERED_BY
 
@@ -67,20 +67,8 @@ TRIAL_COLUMNS = (
     "success",
     "arrival",
 )
-STEP_COLUMNS = (
-    "participant",
-    "task",
-    "method",
-    "phase",
-    "t",
-    "alpha",
-    "intent",
-    "beta",
-    "belief",
-    "distance",
-    "dataset",
-    "trial",
-)
+# The case study's per-tick columns, then where each row comes from.
+STEP_COLUMNS = (*CASE_STEPS_COLUMNS, "dataset", "trial")
 LIKERT_COLUMNS = (
     "dataset",
     "participant",

@@ -89,7 +89,7 @@ def case_study_figure(
     ----------
     steps : DataFrame
         ``steps.csv``: one row per (tick, intent), columns ``participant, task, method,
-        phase, t, alpha, intent, beta, belief``.
+        phase, t, alpha, intent, beta, belief`` (and ``distance``, not drawn).
     participant : str, optional
         Whose runs to draw (the case study has one expert); default: the first.
     epsilon : float, optional
