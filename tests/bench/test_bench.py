@@ -118,6 +118,7 @@ def test_targets_are_the_speed_targets_and_each_is_judged():
 def test_table_says_which_targets_are_met():
     results = scaling_results(90.0, 120.0)
     results.update(trial_realtime_factor=310.0, participant_cpu_s=6.0, irl_s=1.5)
+    results.update(trial_cost_over_physics=2.4, protocol_split_s={"trials": 1.5, "rest": 0.1})
     lines = bench.format_table(results).splitlines()
     verdict = {
         line[:44].strip(): line.rsplit("  ", 1)[-1]
@@ -128,6 +129,8 @@ def test_table_says_which_targets_are_met():
     assert verdict["15 s CASA trial, simulated s per CPU s"] == "met"
     assert verdict["one participant's protocol (CPU s)"] == "MISSED"
     assert verdict["learning one intent (CPU s)"] == "met"
+    assert verdict["trial CPU / its pybullet CPU"] == "MISSED"
+    assert any(line.startswith("  protocol: trials (CPU s)") for line in lines)
     # No neural intent measured: its row has no verdict.
     assert [line for line in lines if "neural" in line][0].endswith("<= 2000")
 
