@@ -176,14 +176,19 @@ def configured_population(simulation: Mapping) -> Population:
     """The population of a validated config's ``simulation`` block.
 
     The fitted population of ``operator_population`` (a `casa calibrate` file,
-    :func:`casa_core.io.population.read_population`) when set, else ``population``.
+    :func:`casa_core.io.population.read_population`) when set, else ``population``. A
+    fitted population takes intermittent control (which `casa calibrate` does not fit, and
+    simulates as ``population`` sets it) from ``population``.
     """
     path = simulation.get("operator_population")
     if path is None:
         return Population.from_config(simulation["population"])
     from casa_core.io.population import read_population
 
-    return Population.from_config(read_population(path)["population"])
+    fitted = read_population(path)["population"]
+    configured = simulation["population"]
+    unfitted = {name: configured[name] for name in INTERMITTENT_PARAMETERS if name in configured}
+    return Population.from_config({**fitted, **unfitted})
 
 
 def inference_preset(config: Mapping) -> Preset:

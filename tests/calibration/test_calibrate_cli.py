@@ -226,6 +226,16 @@ def test_the_study_draws_its_participants_from_a_population_file(calibrated, tmp
     fitted = read_population(calibrated)["population"]
     assert settings.population.deadband.median == fitted["deadband"]["median"]
     assert settings.population.deadband.sigma == 0.25  # the study's spread
+    assert settings.population.pause is None  # the config sets no intermittent control
+    # Intermittent control is not fitted: it comes from the config, as calibrate simulated it.
+    overlay.write_text(
+        f"simulation:\n  operator_population: {calibrated}\n"
+        "  population:\n    pause: {median: 0.5, sigma: 0.3}\n",
+        encoding="utf-8",
+    )
+    settings = StudySettings.from_config(load_config("config/config.yaml", overlay))
+    assert settings.population.pause.median == 0.5
+    assert settings.population.deadband.median == fitted["deadband"]["median"]
 
 
 def test_a_population_file_that_breaks_the_format_is_refused_naming_the_key(calibrated, tmp_path):
