@@ -67,6 +67,11 @@ ANSWERED_BY = {"human": "participant", "simulated": "model"}
 
 #: The eight keys of the keyboard interface: +- along x, y, z and the two rotate keys.
 KEYS = ("x+", "x-", "y+", "y-", "z+", "z-", "rot+", "rot-")
+#: The input devices a person drives the arm with; the keyboard is the paper's and the
+#: default (a log without the metadata key ``input`` was driven by keys).
+INPUTS = ("keyboard", "gamepad", "spacemouse")
+#: The devices that command a velocity instead of holding keys; their logs carry it.
+CONTINUOUS_INPUTS = ("gamepad", "spacemouse")
 
 #: The paper's three 7-point Likert questions, and their display names.
 QUESTIONS = ("understood", "effortless", "useful")

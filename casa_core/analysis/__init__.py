@@ -3,6 +3,8 @@
 The modules, each with one job:
 
 - :mod:`~casa_core.analysis.datasets`: One raw dataset folder in, its processed tables out.
+- :mod:`~casa_core.analysis.effort`: The user's effort, per trial, for keys and for a
+  continuous device alike.
 - :mod:`~casa_core.analysis.metrics`: The user study's objective metrics (paper, Sec. V-B),
   per trial.
 - :mod:`~casa_core.analysis.replay`: Replay: offline inference over a recorded casa-trial/1 log.
@@ -25,15 +27,21 @@ from casa_core.analysis.datasets import (
     write_tables,
     write_validation,
 )
+from casa_core.analysis.effort import (
+    command_integral,
+    command_time,
+    commanded,
+    held_directions,
+    held_keys,
+    key_presses,
+    key_ticks,
+)
 from casa_core.analysis.metrics import (
     REFERENCE_CONDITION,
     REFERENCE_METHOD,
     REFERENCE_PHASES,
     arrival_time,
     efficiency_cost,
-    held_keys,
-    key_presses,
-    key_ticks,
     relative_effort,
     task_success,
     timed_out,
@@ -64,8 +72,12 @@ __all__ = [
     "arrival_time",
     "build_tables",
     "check_dataset",
+    "command_integral",
+    "command_time",
+    "commanded",
     "efficiency_cost",
     "goal_position",
+    "held_directions",
     "held_keys",
     "key_presses",
     "key_ticks",

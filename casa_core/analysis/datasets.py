@@ -60,6 +60,11 @@ TRIAL_COLUMNS = (
     "evidence",
     # The trial's flags (metadata "flags", space-separated; io.contract.TRIAL_FLAGS).
     "flags",
+    # The device the person drove with (metadata "input"; keyboard when it has none), and
+    # the command's time and magnitude (casa_core.analysis.effort), for keys and devices.
+    "input",
+    "command_time",
+    "command_integral",
     # Whether the trial ran to its time limit (empty when its log does not say the
     # limit), whether it ended where the task intends and since when it stayed there
     # (empty when it did not; casa_core.analysis.metrics).
@@ -212,7 +217,13 @@ def _trials_and_steps(
                 **condition,
                 "source": meta["source"],
                 **metrics.trial_metrics(
-                    frame, intended[task], dt=dt, max_duration=meta.get("max_duration")
+                    frame,
+                    intended[task],
+                    dt=dt,
+                    max_duration=meta.get("max_duration"),
+                    input=meta.get("input", "keyboard"),
+                    speed=scene.teleop.speed,
+                    rot_speed=scene.teleop.rot_speed,
                 ),
                 "trial": trial,
                 **_inference(meta),

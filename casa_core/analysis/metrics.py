@@ -20,9 +20,15 @@ For a trial logged at ticks ``t_0 < ... < t_{n-1}`` with end-effector positions
   **efficiency_rot** (rad^2/s^2) the same for ``r``.
 - **effort**: the number of key presses, i.e. press events: key ``k`` is pressed
   at tick ``i`` when ``k in K_i`` and ``k not in K_{i-1}`` (every key held at
-  the first tick counts once). Holding a key is one press.
+  the first tick counts once). Holding a key is one press. For a continuous device
+  (gamepad, SpaceMouse) ``K_i`` are the directions its command holds
+  (:mod:`casa_core.analysis.effort`).
 - **effort_ticks**: the original implementation's counter, ``sum_i |K_i|``
   (a held key counts once per tick).
+- **command_time** (s) and **command_integral** (full-speed seconds): how long a command
+  was given and how large it was, for keys and devices alike
+  (:mod:`casa_core.analysis.effort`).
+- **input**: the device, the metadata's ``input`` (``keyboard`` when it has none).
 - **relative_effort**: ``effort`` divided by the same participant's ``effort`` in
   the NA condition of the same task (:func:`relative_effort`).
 - **duration** (s): ``t_{n-1}``, the seconds from the trial's start to its last tick.
@@ -60,18 +66,25 @@ Examples
 >>> executed = np.array([[0.0, 0, 0, 0, 0], [1.0, 0.1, 0, 0, 0]])
 >>> efficiency_cost(executed[:, 0], executed[:, 1:4])
 0.010000000000000002
+>>> from casa_core.analysis.effort import key_presses, key_ticks
 >>> key_presses(["x+", "x+", "", "x+ y+"]), key_ticks(["x+", "x+", "", "x+ y+"])
 (3, 4)
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 import pandas as pd
 
-from casa_core.defaults import POUR_TILT_TOLERANCE, SUCCESS_RADIUS
+from casa_core.analysis.effort import (
+    command_integral,
+    command_time,
+    commanded,
+    held_directions,
+    held_ticks,
+    presses,
+)
+from casa_core.defaults import POUR_TILT_TOLERANCE, ROT_SPEED, SPEED, SUCCESS_RADIUS
 from casa_core.fixed_order import length
 from casa_core.vocabulary import PHASES, condition_of
 
@@ -164,46 +177,6 @@ def efficiency_cost(t: np.ndarray, values: np.ndarray) -> float:
         return 0.0
     velocities = np.diff(values, axis=0) / np.diff(t)[:, None]
     return float(np.sum(velocities**2))
-
-
-def held_keys(keys: Sequence[str]) -> list[frozenset[str]]:
-    """The set of keys held at each tick, from the log's space-separated ``keys`` cells.
-
-    Examples
-    --------
-    >>> [sorted(held) for held in held_keys(["x+ rot-", ""])]
-    [['rot-', 'x+'], []]
-    """
-    return [frozenset(cell.split()) for cell in keys]
-
-
-def key_presses(keys: Sequence[str]) -> int:
-    """Number of press events: a key not held at the previous tick and held at this one.
-
-    Keys held at the first tick are pressed then; holding a key is one press.
-
-    Examples
-    --------
-    >>> key_presses(["", "x+", "x+", "", "x+ y+", "y+"])
-    3
-    """
-    previous: frozenset[str] = frozenset()
-    presses = 0
-    for held in held_keys(keys):
-        presses += len(held - previous)
-        previous = held
-    return presses
-
-
-def key_ticks(keys: Sequence[str]) -> int:
-    """The original implementation's effort counter: keys held, summed over ticks.
-
-    Examples
-    --------
-    >>> key_ticks(["", "x+", "x+", "", "x+ y+", "y+"])
-    5
-    """
-    return sum(len(held) for held in held_keys(keys))
 
 
 def timed_out(duration: float, max_duration: float | None, *, dt: float) -> bool | None:
@@ -312,7 +285,10 @@ def trial_metrics(
     *,
     dt: float,
     max_duration: float | None = None,
-) -> dict[str, float | int | bool | None]:
+    input: str = "keyboard",
+    speed: float = SPEED,
+    rot_speed: float = ROT_SPEED,
+) -> dict[str, float | int | bool | str | None]:
     """Every per-trial metric of one trial log (module docstring for the formulas).
 
     Parameters
@@ -326,12 +302,17 @@ def trial_metrics(
     max_duration : float, optional
         The trial's time limit (s), the metadata's ``max_duration``; without it
         ``timed_out`` is None.
+    input : str, default "keyboard"
+        The device, the metadata's ``input``.
+    speed, rot_speed : float
+        The scene's key speeds (m/s, rad/s): the full speed of ``command_integral``.
 
     Returns
     -------
     dict
         ``error, error_rot, efficiency, efficiency_rot, effort, effort_ticks,
-        duration, ticks, timed_out, success, arrival``.
+        duration, ticks, timed_out, success, arrival, input, command_time,
+        command_integral``.
 
     Examples
     --------
@@ -346,18 +327,23 @@ def trial_metrics(
     executed = frame[["t", "x", "y", "z", "rot"]].to_numpy(dtype=float)
     error, error_rot = trajectory_error(executed, intended, dt=dt)
     t = executed[:, 0]
+    held = held_directions(frame)
+    commands = commanded(frame, speed=speed, rot_speed=rot_speed)
     return {
         "error": error,
         "error_rot": error_rot,
         "efficiency": efficiency_cost(t, executed[:, 1:4]),
         "efficiency_rot": efficiency_cost(t, executed[:, 4]),
-        "effort": key_presses(frame["keys"]),
-        "effort_ticks": key_ticks(frame["keys"]),
+        "effort": presses(held),
+        "effort_ticks": held_ticks(held),
         "duration": float(t[-1]),
         "ticks": len(t),
         "timed_out": timed_out(float(t[-1]), max_duration, dt=dt),
         "success": task_success(executed, intended),
         "arrival": arrival_time(executed, intended),
+        "input": input,
+        "command_time": command_time(t, commands),
+        "command_integral": command_integral(t, commands, speed=speed, rot_speed=rot_speed),
     }
 
 

@@ -3,10 +3,10 @@
 A replay feeds the logged states and keys to an :class:`~casa_core.assist.assistant.Assistant`
 tick by tick, as the closed loop that recorded the trial did: every ``dt`` (0.5 s) the
 assistant updates its inference with the logged state, and every control tick it is
-told the user's action (from the logged keys) and the authority alpha the arm actually
-applied (the logged ``alpha``; 1 when the log has none: the arm was unassisted). So
-under commanded evidence the robot's share removed from the evidence is the share the
-arm really had.
+told the user's action (from the logged keys, or a device's logged command) and the
+authority alpha the arm actually applied (the logged ``alpha``; 1 when the log has none:
+the arm was unassisted). So under commanded evidence the robot's share removed from the
+evidence is the share the arm really had.
 
 With the trial's own settings (its ``meta["inference"]``, the arbitration of its
 method, its intents and scene) a replay of a simulated trial reproduces the logged
@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from casa_core.analysis.effort import commanded, held_directions
 from casa_core.analysis.replay_intents import (
     goal_position,
     resolve_intents,
@@ -59,7 +60,6 @@ from casa_core.assist.trial import inference_ticks, scene_assistant
 from casa_core.defaults import DT, EPSILON, HORIZON
 from casa_core.io.contract import INTENT_PREFIXES, JOINTS
 from casa_core.io.original.numerics import original_rows
-from casa_core.robot.keys import keys_to_action, parse_keys
 from casa_core.robot.kinematics import POINT_FRAMES, link_frames, point_position, rot_of
 from casa_core.scene import KNOWN_GOALS, Scene
 from casa_core.vocabulary import DEFECTS_PRESET
@@ -162,20 +162,22 @@ def replay_trial(
     if lam is not None:
         options["lam"] = lam
     assistant = scene_assistant(scene, built, arbitration=arbitration, epsilon=epsilon, **options)
-    keys = frame["keys"].fillna("").astype(str).tolist()
+    actions = commanded(frame, speed=teleop.speed, rot_speed=teleop.rot_speed)
     if on_waypoints:
+        held = np.array([bool(held) for held in held_directions(frame)])
         return pd.DataFrame(
-            _replay_waypoints(assistant, path_states, logged, t, keys), columns=list(COLUMNS)
+            _replay_waypoints(assistant, path_states, logged, t, held), columns=list(COLUMNS)
         )
     applied = frame["alpha"].to_numpy(dtype=float) if "alpha" in frame else np.ones(len(t))
-    rows = _replay_ticks(assistant, states, t, ticks, keys, applied, scene)
+    rows = _replay_ticks(assistant, states, t, ticks, actions, applied, scene)
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
 
-def _replay_ticks(assistant: Assistant, states, t, ticks, keys, applied, scene) -> list[dict]:
+def _replay_ticks(assistant: Assistant, states, t, ticks, actions, applied, scene) -> list[dict]:
     """The assistant fed the log tick by tick, as the closed loop was: an inference step at
-    each multiple of the ticks per step, and after every row but the last the keys' action
-    with the authority ``applied`` (the logged alpha)."""
+    each multiple of the ticks per step, and after every row but the last the user's action
+    (the keys' velocity or the device's command) with the authority ``applied`` (the logged
+    alpha)."""
     teleop = scene.teleop
     per_step = inference_ticks(scene)
     rows: list[dict] = []
@@ -187,9 +189,8 @@ def _replay_ticks(assistant: Assistant, states, t, ticks, keys, applied, scene) 
             done.add(tick)
             rows += _step_rows(float(t[i]), assistant.update(states[i]), assistant.names)
         if i + 1 < len(t):  # the closed loop acts after every row but the last
-            action = keys_to_action(parse_keys(keys[i]), teleop.speed, teleop.rot_speed)
             elapsed = (tick % per_step) * teleop.dt
-            assistant.act(states[i], action, elapsed_in_step=elapsed, alpha=applied[i])
+            assistant.act(states[i], actions[i], elapsed_in_step=elapsed, alpha=applied[i])
     return rows
 
 
@@ -232,11 +233,10 @@ def _tick_steps(t, ticks, per_step, states, recorded) -> tuple[list, np.ndarray]
     return logged, states[[0, *index]]
 
 
-def _replay_waypoints(assistant: Assistant, states, logged, t, keys) -> list[dict]:
+def _replay_waypoints(assistant: Assistant, states, logged, t, held) -> list[dict]:
     """The assistant fed the recorded waypoints, one inference step each; a row for each
-    logged step, at its start. Waypoint j's step has user input when a key was held on a
-    tick in ((j - 1) dt, j dt]."""
-    held = np.array([bool(cell.strip()) for cell in keys])
+    logged step, at its start. Waypoint j's step has user input when a key was held (or a
+    command given) on a tick in ((j - 1) dt, j dt]."""
     at = {w: start for start, w in logged}
     rows: list[dict] = []
     assistant.reset(states[0])

@@ -6,7 +6,8 @@ as a :class:`Design` (what to simulate) with the people's summaries
 (:mod:`casa_core.calibration.summaries`). Left out, each with a warning naming the file: a
 trial flagged as not the person's own behaviour (``no-user-command``: the robot drove), and
 a trial after learning, which ran with intents learned from that person's demonstrations,
-which a simulated operator does not have.
+which a simulated operator does not have, and a trial driven with a continuous device
+(gamepad, SpaceMouse), since the simulated operators press keys.
 """
 
 from __future__ import annotations
@@ -159,6 +160,12 @@ def _left_out(meta: dict) -> str | None:
     excluded = [flag for flag in meta.get("flags", ()) if flag in NOT_OWN_BEHAVIOUR]
     if excluded:
         return f"flagged {excluded[0]}: {TRIAL_FLAGS[excluded[0]]}"
+    device = meta.get("input", "keyboard")
+    if device != "keyboard":
+        return (
+            f"driven with a {device}: the simulated operators press keys, so their "
+            "summaries would not compare with a continuous command's"
+        )
     if meta["phase"] not in SIMULATED_PHASES:
         return (
             f"phase {meta['phase']!r} ran with intents learned from this person's "

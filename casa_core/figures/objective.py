@@ -57,6 +57,25 @@ SUCCESS_AXIS = "Success (share of trials)"
 TIMED_OUT_LABEL = "ran out of time"
 
 
+def effort_unit(trials: pd.DataFrame) -> str:
+    """What effort counts in ``trials``: key presses, or a continuous device's presses (an
+    axis leaving its deadzone, casa_core.analysis.effort), by the ``input`` column.
+
+    Examples
+    --------
+    >>> effort_unit(pd.DataFrame({"input": ["keyboard"]})), effort_unit(pd.DataFrame())
+    ('key presses', 'key presses')
+    >>> effort_unit(pd.DataFrame({"input": ["gamepad", "keyboard"]}))
+    'presses of keys or device axes'
+    """
+    devices = set(trials["input"].dropna()) if "input" in trials else set()
+    if devices <= {"keyboard"}:
+        return "key presses"
+    return (
+        "presses of device axes" if "keyboard" not in devices else "presses of keys or device axes"
+    )
+
+
 def stars(p: float) -> str:
     """The usual star code of a p value: ``***`` < .001, ``**`` < .01, ``*`` < .05, else ``""``."""
     if p < 0.001:
@@ -259,7 +278,7 @@ def objective_figure(
                 brackets, used_pooled = _brackets(tops, tukey)
                 pooled |= used_pooled
                 _bars.draw_brackets(ax, brackets)
-            axes[0].set_ylabel(label)
+            axes[0].set_ylabel(label.replace("key presses", effort_unit(rows)))
         _draw_success(grid[-1], rows, columns)
         for ax, task in zip(grid[0], columns, strict=True):
             ax.set_title(TASK_LABELS[task] if task else "")
@@ -287,7 +306,7 @@ def _caption(rows: pd.DataFrame, stats, pooled: bool, title: str | None) -> str:
     caption += (
         " One column per task, each panel on its own y scale."
         " Bars: mean ± standard error over participants; points: participants."
-        " Effort: key presses relative to the same participant's NA trial."
+        f" Effort: {effort_unit(rows)} relative to the same participant's NA trial."
         f" Success: the trial ends with the end effector within {SUCCESS_RADIUS * 100:g} cm"
         " of the end of the intended trajectory (pour: and the cup within"
         f" {POUR_TILT_TOLERANCE:g} rad of the pouring tilt), whether or not it ran out of"

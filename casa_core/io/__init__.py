@@ -24,6 +24,7 @@ from casa_core.io.atomic import (
     write_csv,
 )
 from casa_core.io.contract import (
+    COMMAND_COLUMNS,
     CONDITION_KEYS,
     FRAME_REQUIRED,
     JOINTS,
@@ -56,6 +57,7 @@ from casa_core.io.validation import (
 )
 
 __all__ = [
+    "COMMAND_COLUMNS",
     "CONDITION_KEYS",
     "FRAME_REQUIRED",
     "JOINTS",

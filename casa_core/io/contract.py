@@ -23,6 +23,8 @@ import math
 
 from casa_core.defaults import TICK
 from casa_core.vocabulary import (
+    CONTINUOUS_INPUTS,
+    INPUTS,
     KEYS,
     METHODS,
     PHASE_METHOD,
@@ -38,6 +40,10 @@ __all__ = [
     "BELIEF_SUM_TOLERANCE",
     "CASE_STEPS_COLUMNS",
     "COLUMN_RANGES",
+    "COMMAND_BOUND",
+    "COMMAND_COLUMNS",
+    "CONTINUOUS_INPUTS",
+    "INPUTS",
     "CONDITION_KEYS",
     "FRAME_OPTIONAL",
     "FRAME_REQUIRED",
@@ -93,6 +99,7 @@ META_OPTIONAL = (
     "inference",
     "inference_steps",
     "flags",
+    "input",
 )
 #: The flag of a trial in which the robot drove: the user's command is zero throughout.
 NO_USER_COMMAND = "no-user-command"
@@ -118,12 +125,25 @@ SCENE_NAME = "scene.yaml"
 #: The keys that name a participant's condition (a trial, or a survey answer's subject).
 CONDITION_KEYS = ("participant", "task", "method", "phase")
 #: Metadata keys whose value is one of a fixed set, in the order they are checked.
-META_ENUMS = (("task", TASKS), ("method", METHODS), ("phase", PHASES), ("source", SOURCES))
+META_ENUMS = (
+    ("task", TASKS),
+    ("method", METHODS),
+    ("phase", PHASES),
+    ("source", SOURCES),
+    ("input", INPUTS),
+)
 
 #: Columns every trial has: time (s), end-effector position (m), rotation (rad), keys held.
 FRAME_REQUIRED = ("t", "x", "y", "z", "rot", "keys")
-#: The arbitration weight, logged by assisted trials.
-FRAME_OPTIONAL = ("alpha",)
+#: The velocity ``[vx, vy, vz, vrot]`` (m/s, rad/s) a continuous device commanded during
+#: the tick: the log of a trial whose ``input`` is one of ``CONTINUOUS_INPUTS`` has these
+#: columns and an empty ``keys`` column; a keyboard trial has none of them.
+COMMAND_COLUMNS = ("command_x", "command_y", "command_z", "command_rot")
+#: Bound of a command column (m/s or rad/s): 20 times the keys' speeds, so anything
+#: beyond is a unit error, not a device's command.
+COMMAND_BOUND = 10.0
+#: The arbitration weight, logged by assisted trials, and a continuous device's command.
+FRAME_OPTIONAL = ("alpha", *COMMAND_COLUMNS)
 #: The arm's joint angles (rad).
 JOINTS = tuple(f"q{i}" for i in range(1, 8))
 #: Per-intent columns ``PREFIX:NAME``: the rationality ``beta`` and the ``belief``.
@@ -140,6 +160,7 @@ COLUMN_RANGES = {
     "beta": (0.0, math.inf),
     **dict.fromkeys(("x", "y", "z"), (-POSITION_BOUND, POSITION_BOUND)),
     "rot": (-ROT_BOUND, ROT_BOUND),
+    **dict.fromkeys(COMMAND_COLUMNS, (-COMMAND_BOUND, COMMAND_BOUND)),
 }
 #: Bounds of ``t`` (s): a trial starts at or after 0 and lasts less than an hour.
 TIME_RANGE = (0.0, 3600.0)

@@ -17,6 +17,8 @@ from casa_core.io._ticks import check_belief_sum, check_ticks
 from casa_core.io.contract import (
     BELIEF_SUM_TOLERANCE,
     COLUMN_RANGES,
+    COMMAND_COLUMNS,
+    CONTINUOUS_INPUTS,
     FRAME_OPTIONAL,
     FRAME_REQUIRED,
     INTENT_PREFIXES,
@@ -83,6 +85,44 @@ def _check_keys(keys: pd.Series, file: str, problems: list) -> None:
                 file, f"column 'keys', {where_lines(repeated)}", "keys", "a key is listed twice"
             )
         )
+
+
+def _check_input(cells: pd.DataFrame, meta, file: str) -> list[Problem]:
+    """The rule between the metadata's ``input`` and the columns: a continuous device's
+    trial logs its command and holds no keys; a keyboard trial logs no command."""
+    if not isinstance(meta, dict):
+        return []  # without the metadata the device is unknown
+    device = meta.get("input", "keyboard")
+    present = [c for c in COMMAND_COLUMNS if c in cells.columns]
+    if device in CONTINUOUS_INPUTS:
+        problems = [
+            Problem(
+                file,
+                f"column {column!r}",
+                "input-command",
+                f"missing; a trial whose input is {device!r} logs the velocity it commanded "
+                f"in {', '.join(COMMAND_COLUMNS)}",
+            )
+            for column in COMMAND_COLUMNS
+            if column not in present
+        ]
+        if "keys" in cells.columns:
+            held = cells["keys"].str.strip() != ""
+            if held.any():
+                where = f"column 'keys', {where_lines(held)}"
+                rule = f"must be empty: a {device} trial holds no keys, its command is logged"
+                problems.append(Problem(file, where, "input-command", rule))
+        return problems
+    return [
+        Problem(
+            file,
+            f"column {column!r}",
+            "input-command",
+            f"only a trial whose input is one of {', '.join(CONTINUOUS_INPUTS)} logs a "
+            f"command; this trial's input is {device!r}",
+        )
+        for column in present
+    ]
 
 
 def _valid_frame(cells: pd.DataFrame, meta) -> pd.DataFrame | None:
@@ -166,7 +206,8 @@ def parse_trial_csv(
         Its name, used in problems.
     meta : dict, optional
         The trial's metadata; when it lists ``intents``, every ``beta:NAME`` and
-        ``belief:NAME`` column must name one of them.
+        ``belief:NAME`` column must name one of them, and its ``input`` says whether the
+        command columns must be there (a continuous device) or must not (the keyboard).
 
     Returns
     -------
@@ -195,6 +236,7 @@ def parse_trial_csv(
         # One tick has no motion and no duration: every metric of the trial is undefined.
         message = "one row; a trial needs at least two ticks (its start and its end)"
         problems.append(Problem(file, "", "two-rows", message))
+    problems += _check_input(cells, meta, file)
     if not problems:
         valid = _valid_frame(cells, meta)
         if valid is not None:

@@ -86,9 +86,22 @@ class OriginalTeleoperation:
         direction = np.zeros(4)
         for key in held:
             direction += KEY_DIRECTIONS[key]
+        return self._joint_command(
+            self.speed * self.dt * direction[:3], self.rot_speed * direction[3]
+        )
+
+    def velocity_command(self, velocity) -> np.ndarray:
+        """Joint velocities ``(7,)`` for a continuous device's commanded ``[vx, vy, vz, vrot]``
+        this tick, as keys are turned: the target moves by ``v * dt``; moves the target."""
+        velocity = np.asarray(velocity, dtype=float)
+        return self._joint_command(self.dt * velocity[:3], float(velocity[3]))
+
+    def _joint_command(self, step: np.ndarray, turn: float) -> np.ndarray:
+        """The target moved by ``step`` (m), position-only IK to it, and joint 7 turned
+        backwards at ``turn`` (rad/s, as ``rot+``)."""
         command = np.zeros(len(self.sim.q))
-        if np.any(direction[:3]):
-            self.target = self.target + self.speed * self.dt * direction[:3]
+        if np.any(step):
+            self.target = self.target + step
             solution = p.calculateInverseKinematics(
                 self.sim.robot,
                 LINK7,
@@ -96,7 +109,7 @@ class OriginalTeleoperation:
                 physicsClientId=self.sim.client,
             )
             command = (np.asarray(solution[: len(command)]) - self.sim.q) / self.dt
-        command[-1] -= self.rot_speed * direction[3]  # rot+ turns joint 7 backwards
+        command[-1] -= turn  # rot+ turns joint 7 backwards
         return command
 
     def follow(self, velocity) -> np.ndarray:

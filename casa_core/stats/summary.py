@@ -28,7 +28,7 @@ MEASURES = {
     "error": "error",
     "efficiency": "efficiency cost",
     "relative_effort": "effort relative to NA",
-    "effort": "effort (key presses)",
+    "effort": "effort (presses: keys, or device axes leaving the deadzone)",
     LOG_EFFORT: "log(effort + 1), participant effects",
     **{question: f"Likert: {label}" for question, label in QUESTION_LABELS.items()},
 }

@@ -32,9 +32,11 @@ from casa_core.assist.intents import GoalIntent, Intent
 from casa_core.assist.presets import DEFAULT_PRESET, Preset, preset
 from casa_core.assist.trial import inference_ticks, scene_assistant
 from casa_core.io import write_trial
+from casa_core.io.contract import COMMAND_COLUMNS
 from casa_core.robot.keys import check_keys, format_keys
 from casa_core.robot.sim import ArmSimulation
 from casa_core.scene import KNOWN_GOALS, Scene
+from casa_core.study.command_sources import CommandSource, checked_command, is_continuous
 from casa_core.study.drive import scene_drive
 from casa_core.study.key_sources import KeySource
 from casa_core.study.participants import ParticipantParams, make_participant
@@ -121,7 +123,7 @@ def run_trial(
     scene: Scene,
     task: str,
     method: str,
-    source: KeySource,
+    source: KeySource | CommandSource,
     *,
     participant: str,
     intents: Sequence[Intent] | None = None,
@@ -143,9 +145,12 @@ def run_trial(
     task : str
         ``familiarization``, ``known_goal``, ``unknown_goal`` or ``unknown_skill``.
     method : {"NA", "PBA", "CASA", "BELIEF"}
-    source : KeySource
-        Gives the held keys each tick; the trial ends when ``source.done`` turns true,
-        unless the scene fixes the trial's length (``scene.trial_length``).
+    source : KeySource or CommandSource
+        Gives the held keys each tick, or a continuous device's commanded velocity
+        (:mod:`casa_core.study.command_sources`: the log then has the command columns and
+        its metadata the device, ``input``). The trial ends when ``source.done`` turns true,
+        unless the scene fixes the trial's length (``scene.trial_length``); a device
+        lost (``source.lost``) ends it in either case, the arm stopped.
     participant : str
         Participant id written to the log.
     intents : sequence of Intent, optional
@@ -208,6 +213,8 @@ def run_trial(
     )
     if seed is not None:
         meta["seed"] = int(seed)
+    if is_continuous(source):
+        meta["input"] = source.input
     return TrialResult(meta=meta, frame=pd.DataFrame(rows))
 
 
@@ -308,6 +315,7 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
     dt = scene.teleop.dt
     until_done = scene.trial_length is None
     drive = scene_drive(sim, scene)
+    continuous = is_continuous(source)
     state = drive.start()
     assistant.reset(state)
     names = assistant.names
@@ -322,9 +330,15 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
         if tick > 0 and tick % ticks_per_inference == 0:
             assistant.update(state)
             beta, belief, alpha = assistant.beta, assistant.belief, assistant.alpha
-        held = check_keys(source.keys(t, state))
         x, y, z, rot = state.tolist()
-        row = {"t": round(t, 6), "x": x, "y": y, "z": z, "rot": rot, "keys": format_keys(held)}
+        if continuous:
+            held, command = frozenset(), checked_command(source.command(t, state))
+            row = {"t": round(t, 6), "x": x, "y": y, "z": z, "rot": rot, "keys": ""}
+            row.update(zip(COMMAND_COLUMNS, command.tolist(), strict=True))
+        else:
+            held, command = check_keys(source.keys(t, state)), None
+            row = {"t": round(t, 6), "x": x, "y": y, "z": z, "rot": rot}
+            row["keys"] = format_keys(held)
         row["alpha"] = alpha
         row.update(zip(q_columns, sim.q.tolist(), strict=True))
         for column, name in beta_columns:
@@ -337,11 +351,14 @@ def _closed_loop(sim, assistant, source, scene, ticks_per_inference, max_duratio
         # A trial ended at once still has its start and one tick (the log's two-rows rule).
         if tick > 0 and _ends(source, until_done):
             break
-        state = drive.tick(assistant, state, held, (tick % ticks_per_inference) * dt)
+        elapsed = (tick % ticks_per_inference) * dt
+        state = drive.tick(assistant, state, held, elapsed, command=command)
     return rows
 
 
 def _ends(source, until_done: bool) -> bool:
     """Whether the source ends the trial: when done, or, in a trial of fixed length, only
-    when it stops it (a person's pause, ``paused``)."""
+    when it stops it (a person's pause, ``paused``, or a device lost, ``lost``)."""
+    if getattr(source, "lost", None):
+        return True
     return bool(getattr(source, "done" if until_done else "paused", False))

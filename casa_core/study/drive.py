@@ -45,10 +45,16 @@ class HeldDrive:
         """Put the arm at the scene's start; return the state read back."""
         return self.sim.reset_to_start()
 
-    def tick(self, assistant: Assistant, state, held, elapsed_in_step: float) -> np.ndarray:
-        """Drive one tick with the held keys and the assistant's blend; return the new state."""
+    def tick(
+        self, assistant: Assistant, state, held, elapsed_in_step: float, *, command=None
+    ) -> np.ndarray:
+        """Drive one tick with the held keys (or a device's ``command``, the user's action
+        itself) and the assistant's blend; return the new state."""
         teleop = self.scene.teleop
-        user_action = keys_to_action(held, teleop.speed, teleop.rot_speed)
+        if command is None:
+            user_action = keys_to_action(held, teleop.speed, teleop.rot_speed)
+        else:
+            user_action = np.asarray(command, dtype=float)
         action = assistant.act(state, user_action, elapsed_in_step=elapsed_in_step)
         return self.sim.step(action)
 
@@ -79,8 +85,10 @@ class OriginalDrive:
         state[3] = self.scene.start.rot - (float(self.sim.q[-1]) - self._wrist_start)
         return state
 
-    def tick(self, assistant: Assistant, state, held, elapsed_in_step: float) -> np.ndarray:
-        """Drive one tick; return the new state.
+    def tick(
+        self, assistant: Assistant, state, held, elapsed_in_step: float, *, command=None
+    ) -> np.ndarray:
+        """Drive one tick with the held keys or a device's ``command``; return the new state.
 
         The user's joint command is recorded by the assistant as its velocity at the
         scene's point (the evidence of inference). While the user has full authority the
@@ -90,7 +98,10 @@ class OriginalDrive:
         on link 7, so that the next key moves on from where the assisted arm is instead of
         pulling it back.
         """
-        user_joints = self.teleop.joint_command(held)
+        if command is None:
+            user_joints = self.teleop.joint_command(held)
+        else:
+            user_joints = self.teleop.velocity_command(command)
         user_action = self.teleop.state_velocity(user_joints)
         alpha = assistant.alpha
         if alpha >= 1.0:

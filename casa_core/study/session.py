@@ -133,6 +133,8 @@ class SessionSettings:
     seed: int
     learning_iterations: int | None
     inference: Preset
+    input: str = "keyboard"
+    deadzone: float = 0.15
 
     @classmethod
     def from_config(cls, config: dict) -> SessionSettings:
@@ -154,6 +156,8 @@ class SessionSettings:
             seed=study.seed,
             learning_iterations=session["learning_iterations"],
             inference=study.inference,
+            input=session["input"],
+            deadzone=float(session["deadzone"]),
         )
 
 

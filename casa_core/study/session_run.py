@@ -28,6 +28,7 @@ from casa_core.robot.screens import SLOW, SessionWindow, WindowClosed
 from casa_core.scene import Scene, load_scene
 from casa_core.study import session_texts as texts
 from casa_core.study.closed_loop import run_trial, trial_intents
+from casa_core.study.command_sources import DeviceCommands
 from casa_core.study.session import (
     SessionRecord,
     SessionSettings,
@@ -38,6 +39,8 @@ from casa_core.study.session import (
 from casa_core.vocabulary import LEARNED_NAMES, QUESTIONS
 
 COMPLETE, STOPPED = "complete", "stopped"
+#: A trial's outcome when its device was lost: the session stops.
+LOST = "lost"
 
 
 class SessionLog:
@@ -82,6 +85,7 @@ def run_session(
     scene_source: Path,
     window_factory=SessionWindow,
     quiet: bool = False,
+    device=None,
 ) -> str:
     """Run (or resume) one participant's session; :data:`COMPLETE` or :data:`STOPPED`.
 
@@ -99,6 +103,11 @@ def run_session(
     quiet : bool
         Write the session log's lines (the method order, each trial's method) to the log
         only, not to the console.
+    device : Device, optional
+        The open continuous device of ``settings.input``
+        (:func:`casa_core.robot.devices.open_device`); None drives with the keyboard. A
+        device lost mid-trial stops the arm, keeps the trial as far as it ran and stops
+        the session.
 
     Raises
     ------
@@ -132,7 +141,9 @@ def run_session(
         log("the session is already complete: nothing to do")
         return COMPLETE
     log(f"next step: {step.describe()}")
-    runner = _Runner(record, scene, log, window_factory)
+    if (device is None) != (settings.input == "keyboard"):
+        raise ValueError(f"session input {settings.input!r} needs its device open, and only it")
+    runner = _Runner(record, scene, log, window_factory, device)
     try:
         return runner.run()
     finally:
@@ -153,11 +164,16 @@ def _remove_halves(record: SessionRecord, log: SessionLog) -> None:
 
 
 class _Runner:
-    def __init__(self, record: SessionRecord, scene: Scene, log: SessionLog, window_factory):
+    def __init__(
+        self, record: SessionRecord, scene: Scene, log: SessionLog, window_factory, device
+    ):
         self.record, self.scene, self.log = record, scene, log
         self.settings = record.settings
+        self.device = device
         self._after: list | None = None  # the intents after learning, once loaded
         self.window = window_factory(scene, notify=lambda kind: print(f"screen {kind}", flush=True))
+        if device is not None:
+            self.window.controls = device_controls(self.settings.input)
 
     def run(self) -> str:
         outcome = self._guarded(lambda: self.window.message(*texts.WELCOME, "welcome", None))
@@ -172,6 +188,13 @@ class _Runner:
             if step is None:
                 break
             outcome = self._guarded(lambda step=step: self._step(step))
+            if outcome == LOST:
+                self.log(
+                    f"the session stops: the {self.settings.input} is gone; everything "
+                    "recorded is kept. Plug it in and run the same command to continue"
+                )
+                self._guarded(lambda: self.window.message(*texts.STOPPED, "stopped"))
+                return STOPPED
             if outcome == "pause":
                 self.log(f"paused before finishing: {step.describe()}")
         self.log("session complete")
@@ -235,7 +258,7 @@ class _Runner:
             return "pause"
         window.preview(spec.task, intended_trajectory(spec.task, self.scene), settings.preview)
         window.countdown(settings.countdown)
-        source = window.keyboard()
+        source = self._source(window.keyboard())
         window.start_trial(spec.task)
         started = datetime.now(UTC).isoformat(timespec="seconds")
         result = run_trial(
@@ -261,8 +284,18 @@ class _Runner:
         result.meta["notes"] = (
             f"{shown}; loop rate {rate:.3f} of real time, slowest 2 s {slowest:.3f}"
         )
+        lost = getattr(source, "lost", None)
+        if lost:
+            result.meta["notes"] += f"; ended early, the arm stopped: {lost}"
         stem = self.record.write_trial(spec, result)
         seconds = float(result.frame["t"].iloc[-1])
+        if lost:
+            self.log(
+                f"recorded {stem.name} as far as it ran ({shown}, method {spec.method}): "
+                f"{seconds:.1f} s, then {lost}; the arm was stopped"
+            )
+            window.end_trial("The controller is gone: the arm stopped. Saved.")
+            return LOST
         by_enter = source.done and self.scene.trial_length is None
         ended = "Enter" if by_enter else "time limit"
         self.log(
@@ -278,6 +311,19 @@ class _Runner:
             )
         window.end_trial("Finished. Saved." if by_enter else "Time is up. Saved.")
         return None
+
+    def _source(self, keyboard):
+        """The trial's source: the keyboard, or the device with the keyboard's Enter and P."""
+        if self.device is None:
+            return keyboard
+        teleop = self.scene.teleop
+        return DeviceCommands(
+            self.device,
+            input=self.settings.input,
+            speed=teleop.speed,
+            rot_speed=teleop.rot_speed,
+            keyboard=keyboard,
+        )
 
     def _questions(self, spec) -> str | None:
         label = label_of(spec, self.record.index)

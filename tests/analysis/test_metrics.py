@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from casa_core.analysis import metrics
+from casa_core.analysis import effort, metrics
 from casa_core.assist import tasks
 from tests.io.test_logs_synthetic import SCENE, keys_of_motion
 
@@ -72,11 +72,11 @@ def test_efficiency_cost_of_constant_and_uneven_velocities():
 def test_key_presses_count_press_events_and_ticks_count_held_keys():
     keys = ["", "x+", "x+", "", "x+ y+", "y+", "y+ z-"]
     # Presses: x+ at tick 1; x+ and y+ at tick 4 (x+ was released at 3); z- at 6.
-    assert metrics.key_presses(keys) == 4
+    assert effort.key_presses(keys) == 4
     # Held per tick: 0 1 1 0 2 1 2.
-    assert metrics.key_ticks(keys) == 7
+    assert effort.key_ticks(keys) == 7
     # Keys held at the first tick are pressed then.
-    assert metrics.key_presses(["rot+ rot-", "rot+"]) == 2
+    assert effort.key_presses(["rot+ rot-", "rot+"]) == 2
 
 
 def _trials(efforts: dict) -> pd.DataFrame:

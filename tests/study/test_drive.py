@@ -168,7 +168,7 @@ def test_assisted_ticks_send_the_blend_of_the_users_and_the_robots_joint_velocit
     parts = []
     original_tick = OriginalDrive.tick
 
-    def recording_tick(drive, assistant, state, held, elapsed):
+    def recording_tick(drive, assistant, state, held, elapsed, *, command=None):
         if assistant.latest is not None and assistant.latest.alpha < 1.0:
             # The parts, computed from the same arm and target before the drive acts.
             target = drive.teleop.target.copy()
@@ -184,10 +184,10 @@ def test_assisted_ticks_send_the_blend_of_the_users_and_the_robots_joint_velocit
 
             monkeypatch.setattr(ArmSimulation, "step_joints", once)
             try:
-                return original_tick(drive, assistant, state, held, elapsed)
+                return original_tick(drive, assistant, state, held, elapsed, command=command)
             finally:
                 monkeypatch.setattr(ArmSimulation, "step_joints", recorded)
-        return original_tick(drive, assistant, state, held, elapsed)
+        return original_tick(drive, assistant, state, held, elapsed, command=command)
 
     monkeypatch.setattr(OriginalDrive, "tick", recording_tick)
     goal = ORIGINAL_SCENE.goal("green")
