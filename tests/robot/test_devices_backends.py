@@ -20,12 +20,14 @@ class FakeJoystick:
     axes: list = field(default_factory=lambda: [0.0, 0.0, -1.0, 0.0, 0.0, -1.0])
     buttons: list = field(default_factory=lambda: [0] * 11)
     quit_called: bool = False
+    instance_id: int = 7
+    dropped: bool = False
 
     def init(self):
         pass
 
     def get_instance_id(self):
-        return 7
+        return self.instance_id
 
     def get_name(self):
         return self.name
@@ -34,6 +36,8 @@ class FakeJoystick:
         return len(self.axes)
 
     def get_axis(self, i):
+        if self.dropped:
+            raise RuntimeError("Joystick not initialized")
         return self.axes[i]
 
     def get_numbuttons(self):
@@ -52,6 +56,7 @@ def fake_pygame(joysticks):
     module = types.SimpleNamespace(
         JOYBUTTONDOWN=JOYBUTTONDOWN,
         JOYDEVICEREMOVED=JOYDEVICEREMOVED,
+        error=RuntimeError,
         display=types.SimpleNamespace(init=lambda: None),
         joystick=types.SimpleNamespace(
             init=lambda: None, get_count=lambda: len(joysticks), Joystick=joysticks.__getitem__
@@ -98,6 +103,20 @@ def test_a_gamepad_tap_between_two_reads_fires_finish_once(pad):
     assert not device.read().finish
 
 
+def test_two_gamepads_each_get_their_own_presses(monkeypatch):
+    pads = [FakeJoystick(name="one", instance_id=7), FakeJoystick(name="two", instance_id=8)]
+    pygame = fake_pygame(pads)
+    monkeypatch.setitem(sys.modules, "pygame", pygame)
+    one, two = open_device("gamepad", index=0), open_device("gamepad", index=1)
+    one.read(), two.read()
+    pygame.queued.append(event(JOYBUTTONDOWN, instance_id=8, button=1))
+    assert not one.read().pause  # pad one took pad two's press off pygame's queue
+    assert two.read().pause  # and pad two still sees it
+    two.close()
+    pygame.queued.append(event(JOYBUTTONDOWN, instance_id=8, button=1))  # a closed pad's
+    assert not one.read().pause
+
+
 def test_an_unplugged_gamepad_is_lost_and_stays_lost(pad):
     _, pygame = pad
     device = open_device("gamepad")
@@ -110,6 +129,14 @@ def test_an_unplugged_gamepad_is_lost_and_stays_lost(pad):
     with pytest.raises(DeviceLost):
         device.read()
     device.close()  # closing a lost device is fine
+
+
+def test_a_gamepad_sdl_dropped_before_saying_so_is_lost(pad):
+    joystick, _ = pad
+    device = open_device("gamepad")
+    joystick.dropped = True  # get_axis raises pygame.error, as on a dropped pad
+    with pytest.raises(DeviceLost, match="was unplugged"):
+        device.read()
 
 
 def test_no_gamepad_plugged_in_is_unavailable_saying_what_to_check(monkeypatch):

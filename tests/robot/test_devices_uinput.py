@@ -16,8 +16,9 @@ import pytest
 from casa_core.robot.devices import DeviceLost, DeviceUnavailable, open_device
 
 NAME = "casa virtual pad"
-#: How long SDL may take to see a device come or go (inotify on /dev/input).
-PATIENCE = 3.0
+#: How long SDL may take to see a device come or go (inotify on /dev/input, or its
+#: fallback of looking every 3 s).
+PATIENCE = 5.0
 
 
 def virtual_pad():

@@ -42,6 +42,9 @@ from casa_core.robot.devices._reading import (
 )
 
 GAMEPAD = "gamepad"
+#: The events of each open pad (by SDL instance id): pygame has one queue for all pads,
+#: and the reader that reads first hands the others theirs.
+_EVENTS: dict[int, list] = {}
 
 
 @dataclass(frozen=True)
@@ -152,29 +155,37 @@ class GamepadReader:
         self._joystick = pygame.joystick.Joystick(index)
         self._joystick.init()
         self._id = self._joystick.get_instance_id()
+        _EVENTS[self._id] = []
         self.name = f"gamepad {self._joystick.get_name()!r}"
         self._lost = False
 
     def read(self) -> RawFrame:
         """The pad's axes and buttons now (a button pressed since the last read reads down)."""
         pygame, joystick = self._pygame, self._joystick
-        tapped = set()
         for event in pygame.event.get():
-            if getattr(event, "instance_id", None) != self._id:
-                continue
+            _EVENTS.get(getattr(event, "instance_id", -1), []).append(event)
+        tapped = set()
+        for event in _EVENTS.get(self._id, []):
             if event.type == pygame.JOYDEVICEREMOVED:
                 self._lost = True
             elif event.type == pygame.JOYBUTTONDOWN:
                 tapped.add(event.button)
+        _EVENTS[self._id] = []
         if self._lost:
             raise DeviceLost(f"{self.name} was unplugged")
-        axes = tuple(float(joystick.get_axis(i)) for i in range(joystick.get_numaxes()))
-        buttons = tuple(
-            bool(joystick.get_button(i)) or i in tapped for i in range(joystick.get_numbuttons())
-        )
+        try:
+            axes = tuple(float(joystick.get_axis(i)) for i in range(joystick.get_numaxes()))
+            buttons = tuple(
+                bool(joystick.get_button(i)) or i in tapped
+                for i in range(joystick.get_numbuttons())
+            )
+        except pygame.error as error:  # SDL dropped the pad before saying so
+            self._lost = True
+            raise DeviceLost(f"{self.name} was unplugged ({error})") from error
         return RawFrame(axes, buttons)
 
     def close(self) -> None:
+        _EVENTS.pop(self._id, None)
         if not self._lost:
             self._joystick.quit()
 
