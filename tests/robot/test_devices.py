@@ -222,6 +222,16 @@ def test_a_trace_tick_is_a_parameter_and_a_clock_can_replace_it(tmp_path):
         device.read()
 
 
+def test_a_gamepad_trace_plays_through_a_layout_of_its_own(tmp_path):
+    # Right stick up is axis 4 in the default layout; this one reads axis 5 as z.
+    path = write(tmp_path, PAD_HEADER + "0,0,0,-1,0,-1,-0.575,0,0\n")
+    assert TraceDevice(path).read().axes == (0.0, 0.0, 1.0, 0.0)
+    device = TraceDevice(path, pad_layout=GamepadLayout(z=(5, -1.0)))
+    assert device.read().axes == pytest.approx((0.0, 0.0, 0.5, 0.0))
+    with pytest.raises(ValueError, match="tick must be above 0"):
+        TraceDevice(path, tick=0)
+
+
 def test_a_tap_between_two_reads_still_fires_once(tmp_path):
     # finish is down in the row at 0.02 only, between the reads at 0 and 0.05.
     text = PAD_HEADER + pad_row(0) + pad_row(0.02, finish=1) + pad_row(0.03) + pad_row(0.1)
@@ -322,6 +332,15 @@ def example_trace(kind: str) -> str:
     times = iter([0.0] + [i / 10 for i in range(37)])
     reader = Scripted(kind, frames)
     return record_trace(reader, seconds=3.5, tick=0.1, clock=lambda: next(times), sleep=id)
+
+
+def write_examples() -> None:
+    """Write the example traces again: ``python -c "from tests.robot.test_devices import
+    write_examples; write_examples()"``."""
+    from casa_core.io.atomic import atomic_write_text
+
+    for kind in ("gamepad", "spacemouse"):
+        atomic_write_text(DATA / f"{kind}.csv", example_trace(kind))
 
 
 @pytest.mark.parametrize("kind", ["gamepad", "spacemouse"])

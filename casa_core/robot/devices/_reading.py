@@ -94,7 +94,7 @@ class RawReader(Protocol):
 
 
 #: The mapping of a backend: this frame and the previous one (None at the first read).
-Mapping = Callable[[RawFrame, "RawFrame | None"], DeviceReading]
+FrameMapping = Callable[[RawFrame, "RawFrame | None"], DeviceReading]
 
 
 class MappedDevice:
@@ -113,7 +113,7 @@ class MappedDevice:
     ("gamepad 'still'", (0.0, 0, 0, 0))
     """
 
-    def __init__(self, reader: RawReader, mapping: Mapping):
+    def __init__(self, reader: RawReader, mapping: FrameMapping):
         self.name = reader.name
         self._reader = reader
         self._mapping = mapping

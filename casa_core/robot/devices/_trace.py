@@ -21,7 +21,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from casa_core.defaults import TICK
-from casa_core.robot.devices._gamepad import GAMEPAD, XBOX_LAYOUT, map_gamepad
+from casa_core.robot.devices._gamepad import GAMEPAD, XBOX_LAYOUT, GamepadLayout, map_gamepad
 from casa_core.robot.devices._reading import (
     DEADZONE,
     DeviceLost,
@@ -155,6 +155,8 @@ class TracePlayer:
     def __init__(
         self, path: str | Path, *, tick: float = TICK, clock: Callable[[], float] | None = None
     ):
+        if not tick > 0:
+            raise ValueError(f"a trace's tick must be above 0 s, got {tick}")
         self.kind, self._times, self._frames = read_trace(path)
         self.name = f"{self.kind} trace {Path(path).name!r}"
         self._tick = float(tick)
@@ -196,8 +198,8 @@ class TracePlayer:
 class TraceDevice(MappedDevice):
     """A trace played through its kind's mapping, as the device that recorded it.
 
-    ``kind`` (if given) must be the kind the trace's header names. Raises
-    :class:`TraceError` on a bad file.
+    ``kind`` (if given) must be the kind the trace's header names; a gamepad trace plays
+    through ``pad_layout``. Raises :class:`TraceError` on a bad file.
 
     Examples
     --------
@@ -221,6 +223,7 @@ class TraceDevice(MappedDevice):
         deadzone: float = DEADZONE,
         tick: float = TICK,
         clock: Callable[[], float] | None = None,
+        pad_layout: GamepadLayout = XBOX_LAYOUT,
     ):
         deadzone = check_deadzone(deadzone)
         player = TracePlayer(path, tick=tick, clock=clock)
@@ -228,10 +231,12 @@ class TraceDevice(MappedDevice):
             raise TraceError(f"{path}: line 1: the header is a {player.kind} trace's, not {kind}'s")
         if player.kind == GAMEPAD:
             try:
-                XBOX_LAYOUT.check(player.first_frame, f"{path}: line 1")
+                pad_layout.check(player.first_frame, f"{path}: line 1")
             except DeviceUnavailable as error:
                 raise TraceError(str(error)) from None
-            super().__init__(player, lambda f, p: map_gamepad(f, p, deadzone=deadzone))
+            super().__init__(
+                player, lambda f, p: map_gamepad(f, p, deadzone=deadzone, pad_layout=pad_layout)
+            )
         else:
             super().__init__(player, lambda f, p: map_spacemouse(f, p, deadzone=deadzone))
 
