@@ -13,5 +13,7 @@ The robot knows nothing of learning or the study. The modules, each with one job
 - :mod:`~casa_core.robot.teleop`: the teleoperation window and its keyboard;
 - :mod:`~casa_core.robot.screens`: the window of ``casa session``, screen by screen;
 - :mod:`~casa_core.robot.render`: the scene rendered for ``figures/scene.png``;
-- :mod:`~casa_core.robot.camera`: where the window and the scene figure look.
+- :mod:`~casa_core.robot.camera`: where the window and the scene figure look;
+- :mod:`~casa_core.robot.devices`: a gamepad or a SpaceMouse read as the keyboard's
+  ``[x, y, z, rot]``, or a recorded trace of one.
 """
