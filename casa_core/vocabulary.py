@@ -65,11 +65,6 @@ SOURCES = ("human", "simulated")
 #: are the output of an answer model (casa_core.study.likert), not a person's rating.
 ANSWERED_BY = {"human": "participant", "simulated": "model"}
 
-#: The user's input devices (``casa_core.robot.devices``): the keyboard (the window's,
-#: the default) and the two continuous ones, whose axes give a fraction of a key's speed.
-INPUTS = ("keyboard", "gamepad", "spacemouse")
-CONTINUOUS_INPUTS = INPUTS[1:]
-
 #: The eight keys of the keyboard interface: +- along x, y, z and the two rotate keys.
 KEYS = ("x+", "x-", "y+", "y-", "z+", "z-", "rot+", "rot-")
 #: The input devices a person drives the arm with; the keyboard is the paper's and the

@@ -50,6 +50,48 @@ def learned_intent_option(command) -> None:
     )
 
 
+def input_options(command, *, default: str | None) -> None:
+    """``--input DEVICE`` and ``--device-trace FILE``: what the person drives the arm with."""
+    from casa_core.vocabulary import INPUTS
+
+    told = "(default %(default)s)" if default else "(default: the config's session.input)"
+    command.add_argument(
+        "--input",
+        choices=INPUTS,
+        default=default,
+        help=f"drive with the keyboard, a gamepad or joystick, or a SpaceMouse {told}; "
+        "a device needs the extra casa[devices] (docs/session.md)",
+    )
+    command.add_argument(
+        "--device-trace",
+        metavar="FILE",
+        help="play a recorded trace of the device (docs/devices.md) instead of reading it: "
+        "for tests and demonstrations; the log is written as the device's",
+    )
+
+
+def open_input_device(kind: str, *, deadzone: float, trace: str | None):
+    """The open device of ``kind``, or None for the keyboard.
+
+    Raises
+    ------
+    ValueError
+        A trace without a device, or a device that cannot be opened (its message).
+    """
+    if kind == "keyboard":
+        if trace is not None:
+            raise ValueError(
+                "--device-trace plays a device's trace: choose --input gamepad or spacemouse"
+            )
+        return None
+    from casa_core.robot.devices import DeviceUnavailable, open_device
+
+    try:
+        return open_device(kind, deadzone=deadzone, trace=trace)
+    except DeviceUnavailable as error:
+        raise ValueError(str(error)) from None
+
+
 def dataset_scene_option(command, folder: str) -> None:
     """``--scene YAML`` of a command on a dataset ``folder`` (its metavar): see
     :func:`dataset_scene`."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from casa_core.cli._options import example, scene_option
+from casa_core.cli._options import example, input_options, open_input_device, scene_option
 from casa_core.cli._workflow import add_config_option
 
 
@@ -35,6 +35,7 @@ def register(commands) -> None:
         "epsilon, seed) and inference blocks are used",
     )
     scene_option(command)
+    input_options(command, default=None)
     command.add_argument(
         "--quiet",
         action="store_true",
@@ -45,6 +46,7 @@ def register(commands) -> None:
 
 
 def _session(args) -> int:
+    from dataclasses import replace
     from pathlib import Path
 
     import torch
@@ -61,18 +63,29 @@ def _session(args) -> int:
     config = load_config(*(args.config or ()))
     scene_path = Path(args.scene) if args.scene else DEFAULT_SCENE
     scene = load_scene(scene_path)  # a SceneError is reported by casa_core.cli.main
+    settings = SessionSettings.from_config(config)
+    if args.input is not None:
+        settings = replace(settings, input=args.input)
+    device = None
     try:
+        device = open_input_device(
+            settings.input, deadzone=settings.deadzone, trace=args.device_trace
+        )
         outcome = run_session(
             scene,
             args.participant,
             Path(args.out),
-            settings=SessionSettings.from_config(config),
+            settings=settings,
             scene_source=scene_path,
             quiet=args.quiet,
+            device=device,
         )
     except (FileExistsError, LogError, RuntimeError, ValueError) as error:
         print(f"casa session: {error}", file=sys.stderr)
         return 2
+    finally:
+        if device is not None:
+            device.close()
     if outcome == COMPLETE:
         print(f"casa session: participant {args.participant} complete in {args.out}")
     else:

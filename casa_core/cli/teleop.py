@@ -1,4 +1,5 @@
-"""``casa teleop``: drive the simulated arm from the keyboard in a window; write the log."""
+"""``casa teleop``: drive the simulated arm from the keyboard or a device in a window; write
+the log."""
 
 from __future__ import annotations
 
@@ -7,8 +8,10 @@ import sys
 from casa_core import vocabulary
 from casa_core.cli._options import (
     example,
+    input_options,
     learned_intent_option,
     nonnegative_int,
+    open_input_device,
     positive_float,
     scene_option,
     trial_options,
@@ -19,7 +22,8 @@ def register(commands) -> None:
     """Add ``casa teleop`` to the ``casa`` subcommands."""
     command = commands.add_parser(
         "teleop",
-        help="drive the simulated JACO arm from the keyboard in a window; write the trial log",
+        help="drive the simulated JACO arm from the keyboard (or a gamepad or SpaceMouse) in a "
+        "window; write the trial log",
         description="Open a pybullet window with the task scene; after a countdown, drive the "
         "cup with the arrows (x, y), W/S (z) and A/D (pour); Enter ends the trial. The log "
         "goes to OUT/<task>_<phase>_<method>.{json,csv} (casa-trial/1).",
@@ -41,6 +45,13 @@ def register(commands) -> None:
         default=60.0,
         metavar="SECONDS",
         help="end the trial after this long, done or not (default %(default)g)",
+    )
+    input_options(command, default="keyboard")
+    command.add_argument(
+        "--deadzone",
+        type=float,
+        default=0.15,
+        help="a device's deadzone, a share of full deflection (default %(default)g)",
     )
     _add_assistant_options(command)
     command.set_defaults(func=_teleop)
@@ -91,7 +102,9 @@ def _teleop(args) -> int:
     # A SceneError is reported by casa_core.cli.main.
     scene = load_scene(args.scene).with_teleop_mode(args.teleop_mode)
     inference = preset(args.preset, evidence=args.evidence)
+    device = None
     try:
+        device = open_input_device(args.input, deadzone=args.deadzone, trace=args.device_trace)
         stems, detected = teleop_session(
             scene,
             args.task,
@@ -104,10 +117,15 @@ def _teleop(args) -> int:
             max_duration=args.max_duration,
             intents=trial_intents(scene, args.intent, inference=inference),
             inference=inference,
+            device=device,
+            input=args.input,
         )
     except (FileExistsError, RuntimeError, ValueError) as error:
         print(f"casa teleop: {error}", file=sys.stderr)
         return 2
+    finally:
+        if device is not None:
+            device.close()
     for stem in stems:
         print(f"casa teleop: wrote {stem}.json and {stem}.csv")
     if detected:

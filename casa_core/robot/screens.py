@@ -76,6 +76,7 @@ class SessionWindow:
         self.scene = scene
         self.notify = notify or (lambda kind: None)
         self.rate = self.slowest = 1.0
+        self.controls = f"Keys: {HELP}"  # a device's own, when the session drives with one
         self._open()
 
     def _open(self) -> None:
@@ -202,7 +203,7 @@ class SessionWindow:
         self.highlight(task)
         top = self.write(title, 0, size=2.0)
         top = self.write(body, top)
-        top = self.write(f"Keys: {HELP}", top, size=1.2)
+        top = self.write(self.controls, top, size=1.2)
         self.write("Press Enter to see the path and start.   P: pause", top, color=GO)
         self.poll()
         self.notify("instructions")
@@ -254,7 +255,7 @@ class SessionWindow:
         self.clear()
         self.highlight(task)
         self._go = self.big("GO", GO)
-        self.write(f"Keys: {HELP}", self.height - 80, size=1.2)
+        self.write(self.controls, self.height - 80, size=1.2)
         self._warning: int | None = None
         self._banner = self._replace(None, self._banner_text(0.0), 30, INK)
         self._clock = time.perf_counter()  # after drawing: the first tick is not late

@@ -4,6 +4,8 @@
   participants (operator models) and the predictive operator's estimate of the arm;
   :mod:`~casa_core.study.operator_params`: their parameters, drawn from the population;
 - :mod:`~casa_core.study.key_sources`: scripted key sources and their protocol;
+  :mod:`~casa_core.study.command_sources`: a continuous device's commanded velocity in
+  their place (a gamepad, a SpaceMouse, a script);
 - :mod:`~casa_core.study.closed_loop`: one trial, pybullet in the loop;
   :mod:`~casa_core.study.drive`: how a tick's keys and the robot's action move the arm, per
   teleoperation mode;

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import KW_ONLY, dataclass, field
-from typing import Protocol
+from typing import Protocol, TypeGuard
 
 import numpy as np
 
@@ -34,7 +34,7 @@ class CommandSource(Protocol):
         ...
 
 
-def is_continuous(source) -> bool:
+def is_continuous(source) -> TypeGuard[CommandSource]:
     """Whether ``source`` commands a velocity (a command source) rather than keys.
 
     Examples
@@ -121,7 +121,8 @@ class DeviceCommands:
     Each tick reads the device once: its axes ``[x, y, z, rot]`` in [-1, 1] times
     ``[speed, speed, speed, rot_speed]``, so full deflection commands what a held key
     does. Its finish button ends the trial (``done``), its pause button pauses it
-    (``done`` and ``paused``). A window's keyboard, when given, is read too for Enter
+    (``done`` and ``paused``); a press made before the source was made (between trials)
+    is read and dropped when it is made. A window's keyboard, when given, is read too for Enter
     and the pause key, so a session's keys work beside the device. A device lost
     (:class:`~casa_core.robot.devices.DeviceLost`: unplugged, or its trace ended) stops
     the arm: the command is zero from then on, ``lost`` says what happened, and the trial
@@ -146,19 +147,25 @@ class DeviceCommands:
         self._scale = np.array([speed, speed, speed, rot_speed], dtype=float)
         self.done = self.paused = False
         self.lost: str | None = None
+        self._read()  # buttons pressed before the trial started do not count
 
-    def command(self, t: float, state) -> np.ndarray:
+    def _read(self):
+        """The device's reading, or None once it is lost (``lost`` says how)."""
         from casa_core.robot.devices import DeviceLost
 
-        if self.keyboard is not None:
-            self.keyboard.keys(t, state)  # its arm keys are ignored: the device drives
-            self.done, self.paused = self.keyboard.done, self.keyboard.paused
-        if self.done or self.lost:
-            return np.zeros(4)
         try:
-            reading = self.device.read()
+            return self.device.read()
         except DeviceLost as error:
             self.lost, self.done = str(error), True
+            return None
+
+    def command(self, t: float, state) -> np.ndarray:
+        if self.keyboard is not None:
+            self.keyboard.keys(t, state)  # its arm keys are ignored: the device drives
+            self.done |= self.keyboard.done
+            self.paused |= self.keyboard.paused
+        reading = None if self.done or self.lost else self._read()
+        if reading is None:
             return np.zeros(4)
         if reading.pause or reading.finish:
             self.done, self.paused = True, bool(reading.pause)

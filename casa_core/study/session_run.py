@@ -24,6 +24,7 @@ from casa_core.defaults import HORIZON
 from casa_core.io import SCHEMA, check_meta
 from casa_core.io.atomic import atomic_write_text
 from casa_core.io.contract import SCENE_NAME, TRIAL_SUFFIXES
+from casa_core.robot.devices import CONTROLS
 from casa_core.robot.screens import SLOW, SessionWindow, WindowClosed
 from casa_core.scene import Scene, load_scene
 from casa_core.study import session_texts as texts
@@ -173,7 +174,7 @@ class _Runner:
         self._after: list | None = None  # the intents after learning, once loaded
         self.window = window_factory(scene, notify=lambda kind: print(f"screen {kind}", flush=True))
         if device is not None:
-            self.window.controls = device_controls(self.settings.input)
+            self.window.controls = CONTROLS[self.settings.input]
 
     def run(self) -> str:
         outcome = self._guarded(lambda: self.window.message(*texts.WELCOME, "welcome", None))

@@ -21,6 +21,7 @@ from casa_core.robot.sim import ArmSimulation
 from casa_core.robot.teleop import KeyboardKeys, Window
 from casa_core.scene import Scene
 from casa_core.study.closed_loop import default_phase, run_trial
+from casa_core.study.command_sources import DeviceCommands
 from casa_core.study.key_sources import KeySource
 from casa_core.study.protocol import TrialSpec, demonstrations, misspecification_detected
 from casa_core.vocabulary import TASK_LABELS
@@ -44,6 +45,8 @@ def run_teleop(
     title: str | None = None,
     inference: Preset | str = DEFAULT_PRESET,
     assistant_options: dict | None = None,
+    device=None,
+    input: str = "keyboard",
 ) -> Path:
     """Run one teleoperated trial and write its log; return the log's stem.
 
@@ -80,9 +83,17 @@ def run_teleop(
         The inference preset (:mod:`casa_core.assist.presets`).
     assistant_options : dict, optional
         Extra keyword arguments of :class:`~casa_core.assist.assistant.Assistant`.
+    device : Device, optional
+        An open continuous device (:func:`casa_core.robot.devices.open_device`) of kind
+        ``input``, read in place of the keyboard (whose Enter still ends the trial).
+    input : str
+        The device's kind, written to the log's ``input``.
 
     Raises
     ------
+    TrialCutShort
+        If the device was lost mid-trial: the arm was stopped and the trial written as
+        far as it ran.
     FileExistsError
         If the log already exists in ``out``.
     ValueError
@@ -104,7 +115,7 @@ def run_teleop(
             )
     with ArmSimulation(scene, gui=gui) as sim:
         window = Window(sim, realtime)
-        source = KeyboardKeys(sim.client) if key_source is None else key_source
+        source = _source(sim, key_source, device, input)
         # The method is not shown: the participant must not know which one drives.
         window.intro(title or TASK_LABELS[task], countdown)
         started = datetime.now(UTC).isoformat(timespec="seconds")
@@ -124,9 +135,34 @@ def run_teleop(
             on_tick=window.on_tick,
         )
         result.meta["started_at"] = started
+        lost = getattr(source, "lost", None)
+        if lost:
+            result.meta["notes"] = f"ended early, the arm stopped: {lost}"
         result.write(stem)
         window.finish(f"saved {stem.name}")
+    if lost:
+        raise TrialCutShort(
+            f"{lost}: the arm was stopped and the trial kept as far as it ran, in "
+            f"{stem}.json and {stem}.csv"
+        )
     return stem
+
+
+class TrialCutShort(RuntimeError):
+    """A trial ended early because its device was lost; its log was written."""
+
+
+def _source(sim: ArmSimulation, key_source, device, input: str):
+    """The trial's source: a given key source, the device, or the window's keyboard."""
+    if key_source is not None:
+        return key_source
+    if device is None:
+        return KeyboardKeys(sim.client)
+    teleop = sim.scene.teleop
+    keyboard = KeyboardKeys(sim.client) if sim.gui else None  # Enter, in a window
+    return DeviceCommands(
+        device, input=input, speed=teleop.speed, rot_speed=teleop.rot_speed, keyboard=keyboard
+    )
 
 
 def teleop_session(

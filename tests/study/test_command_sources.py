@@ -139,7 +139,8 @@ class _Unplugged:
 @pytest.mark.parametrize("trial_length", [None, 15.0])
 def test_a_device_lost_mid_trial_stops_the_arm_and_ends_the_trial(trial_length):
     scene = dataclasses.replace(load_scene(), trial_length=trial_length)
-    source = DeviceCommands(_Unplugged(10), input="gamepad", speed=0.05, rot_speed=0.5)
+    # Its first read is dropped (a press before the trial), then ten reads of x+.
+    source = DeviceCommands(_Unplugged(11), input="gamepad", speed=0.05, rot_speed=0.5)
     result = run_trial(scene, "known_goal", "NA", source, participant="p", max_duration=30)
     frame = result.frame
     assert source.lost == "gamepad 'test pad' was unplugged" and source.done

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from casa_core.analysis import metrics
+from casa_core.analysis import effort
 from casa_core.assist.tasks import intended_trajectory
 from casa_core.config import load_config
 from casa_core.scene import load_scene
@@ -55,7 +55,7 @@ def measures(frame):
     keys = frame["keys"].fillna("").tolist()
     held = np.array([bool(cell.split()) for cell in keys])
     duration = float(frame["t"].iloc[-1])
-    return metrics.key_presses(keys) / duration, held.mean(), float(frame["t"][held.argmax()])
+    return effort.key_presses(keys) / duration, held.mean(), float(frame["t"][held.argmax()])
 
 
 def test_the_operator_of_bout_1_s_without_pause_or_planning_is_the_operator_without_them(sim):

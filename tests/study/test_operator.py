@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from casa_core.analysis import metrics
+from casa_core.analysis import effort, metrics
 from casa_core.assist.tasks import intended_trajectory
 from casa_core.config import load_config
 from casa_core.robot.sim import ArmSimulation
@@ -52,7 +52,7 @@ def trial(sim, task, method, index, *, operator="predictive", params=None):
     keys = frame["keys"].fillna("").tolist()
     executed = frame[["t", "x", "y", "z", "rot"]].to_numpy()
     success = metrics.task_success(executed, reference)
-    return metrics.key_presses(keys), metrics.key_ticks(keys), success, frame
+    return effort.key_presses(keys), effort.key_ticks(keys), success, frame
 
 
 @pytest.mark.parametrize("method", ["CASA", "PBA"])

@@ -59,8 +59,17 @@ from casa_core.robot.devices._trace import (
 )
 from casa_core.vocabulary import CONTINUOUS_INPUTS, INPUTS
 
+#: What a participant is told to use, per device (the session's screens show it).
+CONTROLS = {
+    "gamepad": "left stick: move the cup   right stick up / down: up / down   "
+    "right stick left / right: tilt to pour / back   A: finished   B: pause",
+    "spacemouse": "push the cap: move the cup   lift / press: up / down   "
+    "twist: tilt to pour / back   left button: finished   right button: pause",
+}
+
 __all__ = [
     "CONTINUOUS_INPUTS",
+    "CONTROLS",
     "DEADZONE",
     "INPUTS",
     "PIP_EXTRA",
