@@ -10,6 +10,7 @@ from casa_core.cli._options import (
     example,
     input_options,
     learned_intent_option,
+    nonnegative_float,
     nonnegative_int,
     open_input_device,
     positive_float,
@@ -49,7 +50,7 @@ def register(commands) -> None:
     input_options(command, default="keyboard")
     command.add_argument(
         "--deadzone",
-        type=float,
+        type=nonnegative_float,
         default=0.15,
         help="a device's deadzone, a share of full deflection (default %(default)g)",
     )

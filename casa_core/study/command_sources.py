@@ -86,7 +86,7 @@ class ScriptedCommands:
     Examples
     --------
     >>> source = ScriptedCommands([(0.1, [0.05, 0, 0, 0])])
-    >>> [source.command(t, None)[0] for t in (0.0, 0.05, 0.1)], source.done
+    >>> [float(source.command(t, None)[0]) for t in (0.0, 0.05, 0.1)], source.done
     ([0.05, 0.05, 0.0], True)
     """
 
