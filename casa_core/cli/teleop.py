@@ -17,6 +17,7 @@ from casa_core.cli._options import (
     scene_option,
     trial_options,
 )
+from casa_core.robot.devices import DEADZONE
 
 
 def register(commands) -> None:
@@ -51,7 +52,7 @@ def register(commands) -> None:
     command.add_argument(
         "--deadzone",
         type=nonnegative_float,
-        default=0.15,
+        default=DEADZONE,
         help="a device's deadzone, a share of full deflection (default %(default)g)",
     )
     _add_assistant_options(command)

@@ -149,6 +149,14 @@ class DeviceCommands:
         self.lost: str | None = None
         self._read()  # buttons pressed before the trial started do not count
 
+    @classmethod
+    def in_scene(cls, device, scene, *, input: str, keyboard=None) -> DeviceCommands:
+        """The device's commands at the key speeds of ``scene`` (its ``teleop``)."""
+        teleop = scene.teleop
+        return cls(
+            device, input=input, speed=teleop.speed, rot_speed=teleop.rot_speed, keyboard=keyboard
+        )
+
     def _read(self):
         """The device's reading, or None once it is lost (``lost`` says how)."""
         from casa_core.robot.devices import DeviceLost

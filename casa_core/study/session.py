@@ -31,6 +31,7 @@ import pandas as pd
 from casa_core.assist.presets import Preset
 from casa_core.io import SURVEY_COLUMNS, SURVEYS_NAME, read_surveys, read_trial, write_surveys
 from casa_core.io.contract import INTENT_SUFFIX, SINGLE_TRIAL_PHASES
+from casa_core.robot.devices import DEADZONE
 from casa_core.scene import Scene
 from casa_core.study import protocol
 from casa_core.study.closed_loop import TrialResult
@@ -134,7 +135,7 @@ class SessionSettings:
     learning_iterations: int | None
     inference: Preset
     input: str = "keyboard"
-    deadzone: float = 0.15
+    deadzone: float = DEADZONE
 
     @classmethod
     def from_config(cls, config: dict) -> SessionSettings:

@@ -317,13 +317,8 @@ class _Runner:
         """The trial's source: the keyboard, or the device with the keyboard's Enter and P."""
         if self.device is None:
             return keyboard
-        teleop = self.scene.teleop
-        return DeviceCommands(
-            self.device,
-            input=self.settings.input,
-            speed=teleop.speed,
-            rot_speed=teleop.rot_speed,
-            keyboard=keyboard,
+        return DeviceCommands.in_scene(
+            self.device, self.scene, input=self.settings.input, keyboard=keyboard
         )
 
     def _questions(self, spec) -> str | None:

@@ -158,11 +158,8 @@ def _source(sim: ArmSimulation, key_source, device, input: str):
         return key_source
     if device is None:
         return KeyboardKeys(sim.client)
-    teleop = sim.scene.teleop
     keyboard = KeyboardKeys(sim.client) if sim.gui else None  # Enter, in a window
-    return DeviceCommands(
-        device, input=input, speed=teleop.speed, rot_speed=teleop.rot_speed, keyboard=keyboard
-    )
+    return DeviceCommands.in_scene(device, sim.scene, input=input, keyboard=keyboard)
 
 
 def teleop_session(
