@@ -17,10 +17,10 @@ import pandas as pd
 
 from casa_core.calibration import fit
 from casa_core.calibration.design import People
-from casa_core.calibration.simulator import PARAMETERS, Simulator, simulate_many, with_medians
+from casa_core.calibration.simulator import Simulator, simulate_many, with_medians
 from casa_core.calibration.summaries import cell_means, summary_labels
-from casa_core.study.settings import Population
-from casa_core.vocabulary import METHODS
+from casa_core.study.settings import LOGNORMAL_PARAMETERS, Population
+from casa_core.vocabulary import INTERMITTENT_PARAMETERS, METHODS
 
 #: Posterior samples kept in the population file.
 POSTERIOR_SAMPLES = 1000
@@ -47,6 +47,7 @@ class Calibration:
     """What :func:`calibrate` found (attributes named as in the population file)."""
 
     dataset: str
+    parameters: tuple[str, ...]
     bounds: np.ndarray
     samples: np.ndarray
     population: Population
@@ -104,7 +105,7 @@ def calibrate(
         raise ValueError(
             f"no trial of the methods {', '.join(fit_methods)} in dataset {people.dataset!r}"
         )
-    bounds = fit.prior_bounds(simulator.base)
+    bounds = fit.prior_bounds(simulator.base, simulator.parameters)
     if prior_simulations is None:
         theta = fit.draw_prior(bounds, simulations, np.random.default_rng([seed, 0]))
         x = simulate_many(
@@ -114,10 +115,18 @@ def calibrate(
         theta, x = prior_simulations
     observed = cell_means(people.summaries, cells)
     posterior = fit.train_posterior(theta, x[:, mask], bounds, seed=seed)
-    samples = fit.sample_posterior(
-        posterior, observed[mask], POSTERIOR_SAMPLES, seed=seed + 1, bounds=bounds
+    try:
+        samples = fit.sample_posterior(
+            posterior, observed[mask], POSTERIOR_SAMPLES, seed=seed + 1, bounds=bounds
+        )
+    except ValueError as error:
+        beyond = unreached(observed, x, summary_labels(cells), mask)
+        if beyond:
+            error = ValueError(f"{error}. No simulated operator reaches: {'; '.join(beyond)}")
+        raise error from None
+    population = with_medians(
+        simulator.base, np.exp(np.median(samples, axis=0)), simulator.parameters
     )
-    population = with_medians(simulator.base, np.exp(np.median(samples, axis=0)))
     draws = samples[np.linspace(0, len(samples) - 1, predictive).astype(int)]
     predicted = simulate_many(
         simulator,
@@ -129,6 +138,7 @@ def calibrate(
     table = predictive_table(people, predicted, mask)
     return Calibration(
         people.dataset,
+        simulator.parameters,
         bounds,
         samples,
         population,
@@ -137,6 +147,30 @@ def calibrate(
         len(theta),
         int(fit.usable(x[:, mask]).sum()),
     )
+
+
+def unreached(
+    observed: np.ndarray, x: np.ndarray, labels: Sequence[tuple[str, str, str]], mask: np.ndarray
+) -> list[str]:
+    """The fitted summaries whose people's value lies outside every simulation's from the prior.
+
+    Examples
+    --------
+    >>> x = np.array([[1.0, 5.0], [2.0, 6.0]])
+    >>> unreached(np.array([1.5, 9.0]), x, [("a", "NA", "hold"), ("a", "NA", "gap")],
+    ...           np.array([True, True]))
+    ['a NA gap: people 9, operators 5-6']
+    """
+    out = []
+    for j in np.flatnonzero(mask).tolist():
+        column = x[:, j][np.isfinite(x[:, j])]
+        if len(column) and not column.min() <= observed[j] <= column.max():
+            task, method, name = labels[j]
+            out.append(
+                f"{task} {method} {name}: people {observed[j]:.3g}, "
+                f"operators {column.min():.3g}-{column.max():.3g}"
+            )
+    return out
 
 
 def predictive_table(people: People, predicted: np.ndarray, mask: np.ndarray) -> pd.DataFrame:
@@ -173,7 +207,8 @@ def population_document(result: Calibration, *, operator: str, seed: int) -> dic
     population = result.population
     block: dict = {
         name: {"median": getattr(population, name).median, "sigma": getattr(population, name).sigma}
-        for name in PARAMETERS
+        for name in (*LOGNORMAL_PARAMETERS, *INTERMITTENT_PARAMETERS)
+        if getattr(population, name) is not None
     }
     block["max_keys"] = {
         "values": list(population.max_keys.values),
@@ -190,7 +225,7 @@ def population_document(result: Calibration, *, operator: str, seed: int) -> dic
         "usable_simulations": result.usable_simulations,
         "population": block,
         "posterior": {
-            "parameters": list(PARAMETERS),
+            "parameters": list(result.parameters),
             "prior_log_bounds": result.bounds.tolist(),
             "log_median_samples": np.round(result.samples, 6).tolist(),
         },

@@ -16,7 +16,7 @@ import pandas as pd
 from casa_core.calibration import fit
 from casa_core.calibration.calibrate import LEVEL, Calibration, calibrate
 from casa_core.calibration.design import People
-from casa_core.calibration.simulator import PARAMETERS, Simulator, simulate_many
+from casa_core.calibration.simulator import Simulator, simulate_many
 
 #: A parameter with a mean shrinkage below this is reported as not identified.
 IDENTIFIED_SHRINKAGE = 0.2
@@ -30,7 +30,7 @@ def simulate_prior(
 
     The same draws as :func:`~casa_core.calibration.calibrate.calibrate` makes with ``seed``.
     """
-    bounds = fit.prior_bounds(simulator.base)
+    bounds = fit.prior_bounds(simulator.base, simulator.parameters)
     theta = fit.draw_prior(bounds, n, np.random.default_rng([seed, 0]))
     x = simulate_many(simulator, np.exp(theta), range(n), cores=cores, progress=progress)
     return theta, x
@@ -53,7 +53,7 @@ def parameter_recovery(
     ``datasets`` are the synthetic people. ``prior_simulations`` (log-medians and cell
     means, from :func:`simulate_prior`) gives them instead of new ones.
     """
-    bounds = fit.prior_bounds(simulator.base)
+    bounds = fit.prior_bounds(simulator.base, simulator.parameters)
     if prior_simulations is None:
         prior_simulations = simulate_prior(
             simulator, train + datasets, seed=seed, cores=cores, progress=progress
@@ -72,7 +72,7 @@ def parameter_recovery(
     mean_shrinkage = np.mean(shrunk, axis=0)
     return pd.DataFrame(
         {
-            "parameter": list(PARAMETERS),
+            "parameter": list(simulator.parameters),
             "datasets": len(truths),
             "coverage": covered,
             "shrinkage": mean_shrinkage,

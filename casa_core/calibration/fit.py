@@ -1,11 +1,13 @@
 """Neural posterior estimation of the operator population (sbi's NPE), and its predictions.
 
 The free parameters are the logarithms of the population's medians
-(:data:`~casa_core.calibration.simulator.PARAMETERS`). Their prior is uniform over a factor
-:data:`PRIOR_FACTOR` either side of the study's own medians (``simulation.population``),
-fixed before any fit was run: wide enough to hold every value the operator literature
-cites (docs/departures.md, "Simulated operators"), narrow enough to keep the operator in
-the regime where it finishes a trial. NPE (sbi) learns the posterior from simulations
+(:func:`~casa_core.calibration.simulator.fitted_parameters`). Their prior is uniform in log
+space, fixed before any fit was run: over a factor :data:`PRIOR_FACTOR` either side of the
+study's own medians (``simulation.population``), wide enough to hold every value the
+operator literature cites (docs/departures.md, "Simulated operators"), narrow enough to
+keep the operator in the regime where it finishes a trial; and for intermittent control
+over the ranges of :data:`~casa_core.study.operator_params.INTERMITTENT_PRIORS`, taken
+from its literature. NPE (sbi) learns the posterior from simulations
 drawn from the prior, once for all observations (it is amortised), which is what makes
 the parameter-recovery check over many synthetic datasets affordable: one training set
 serves them all.
@@ -17,7 +19,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from casa_core.calibration.simulator import PARAMETERS
+from casa_core.study.operator_params import INTERMITTENT_PRIORS
 from casa_core.study.settings import Population
 
 #: The prior of each median spans median / PRIOR_FACTOR to median * PRIOR_FACTOR.
@@ -32,19 +34,25 @@ OVERSAMPLE = 10
 FEATURE_FLOOR = 0.01
 
 
-def prior_bounds(base: Population) -> np.ndarray:
-    """``[low, high]`` of each log-median, one row per parameter of :data:`PARAMETERS`.
+def prior_bounds(base: Population, parameters: Sequence[str]) -> np.ndarray:
+    """``[low, high]`` of each log-median, one row per name of ``parameters``.
 
     Examples
     --------
     >>> from casa_core.config import DEFAULT_CONFIG, load_config
     >>> base = Population.from_config(load_config(DEFAULT_CONFIG)["simulation"]["population"])
-    >>> np.exp(prior_bounds(base)[0]).round(4).tolist()  # reaction time, s
-    [0.1167, 1.05]
+    >>> bounds = np.exp(prior_bounds(base, ["reaction_time", "pause"]))
+    >>> bounds.round(4).tolist()  # s
+    [[0.1167, 1.05], [0.1, 3.0]]
     """
-    centre = np.log([getattr(base, name).median for name in PARAMETERS])
-    half = np.log(PRIOR_FACTOR)
-    return np.column_stack([centre - half, centre + half])
+    rows: list[list[float]] = []
+    for name in parameters:
+        if name in INTERMITTENT_PRIORS:
+            rows.append(np.log(INTERMITTENT_PRIORS[name]).tolist())
+        else:
+            centre = np.log(getattr(base, name).median)
+            rows.append([centre - np.log(PRIOR_FACTOR), centre + np.log(PRIOR_FACTOR)])
+    return np.array(rows, dtype=float)
 
 
 def draw_prior(bounds: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:

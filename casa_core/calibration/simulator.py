@@ -1,8 +1,9 @@
 """The simulator of `casa calibrate`: a dataset's design run by simulated operators in pybullet.
 
-A candidate population (the operator parameters' medians; their spreads and ``max_keys``
-stay the study's) is turned into one simulated participant per person of the design, who
-runs that person's trials in the same scene, each a closed-loop trial with pybullet
+A candidate population (the medians of the operator parameters :func:`fitted_parameters`
+names; their spreads and ``max_keys`` stay the study's) is turned into one simulated
+participant per person of the design, who runs that person's trials in the same scene,
+each a closed-loop trial with pybullet
 (:func:`casa_core.study.closed_loop.run_trial`). Every draw comes from
 ``numpy.random.default_rng([seed, draw, person, trial])``, so a simulation does not depend
 on which process runs it.
@@ -24,19 +25,38 @@ from casa_core.calibration.design import Design
 from casa_core.calibration.summaries import SUMMARIES, cell_means, trial_summaries
 from casa_core.scene import Scene
 from casa_core.study.closed_loop import simulated_trial
+from casa_core.study.operator_params import INTERMITTENT_SIGMA
 from casa_core.study.participants import draw_participants
 from casa_core.study.settings import LOGNORMAL_PARAMETERS, Lognormal, Population
-
-#: The free parameters of the fit: the medians of the population's lognormal parameters.
-PARAMETERS = LOGNORMAL_PARAMETERS
+from casa_core.vocabulary import INTERMITTENT_PARAMETERS
 
 
-def with_medians(population: Population, medians) -> Population:
-    """``population`` with its lognormal medians replaced, in the order of :data:`PARAMETERS`."""
-    changed = {
-        name: Lognormal(float(value), getattr(population, name).sigma)
-        for name, value in zip(PARAMETERS, medians, strict=True)
-    }
+def fitted_parameters(operator: str) -> tuple[str, ...]:
+    """The free parameters of a fit of ``operator``: the medians of these parameters.
+
+    The predictive operator's intermittent control is fitted with the rest; the lookahead
+    operator has none.
+
+    Examples
+    --------
+    >>> fitted_parameters("predictive")[-3:], len(fitted_parameters("lookahead"))
+    (('bout', 'pause', 'planning'), 6)
+    """
+    if operator == "predictive":
+        return (*LOGNORMAL_PARAMETERS, *INTERMITTENT_PARAMETERS)
+    return LOGNORMAL_PARAMETERS
+
+
+def with_medians(population: Population, medians, parameters: tuple[str, ...]) -> Population:
+    """``population`` with the medians of ``parameters`` replaced, in that order.
+
+    Each keeps its spread; an intermittent parameter the population does not set gets
+    :data:`~casa_core.study.operator_params.INTERMITTENT_SIGMA`.
+    """
+    changed = {}
+    for name, value in zip(parameters, medians, strict=True):
+        spec = getattr(population, name)
+        changed[name] = Lognormal(float(value), INTERMITTENT_SIGMA if spec is None else spec.sigma)
     return replace(population, **changed)  # type: ignore[arg-type]
 
 
@@ -64,11 +84,16 @@ class Simulator:
     inference: Preset
     seed: int
 
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The fit's free parameters (:func:`fitted_parameters` of the operator)."""
+        return fitted_parameters(self.operator)
+
     def trials(self, medians, draw: int, sim=None) -> pd.DataFrame:
         """One simulated dataset: each planned trial's summaries, in the design's order."""
         from casa_core.robot.sim import ArmSimulation
 
-        population = with_medians(self.base, medians)
+        population = with_medians(self.base, medians, self.parameters)
         own = sim is None
         sim = sim or ArmSimulation(self.scene)
         rows = []

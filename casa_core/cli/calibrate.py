@@ -98,11 +98,16 @@ def _calibrate(args) -> int:
     if result is None:
         return 2
     table, figure = _write(out, result, people, settings, args.seed)
-    inside = result.predictive["inside"].mean()
+    predictive = result.predictive
     print(
-        f"casa calibrate: {inside:.0%} of the people's cell summaries inside the fitted "
-        f"model's 90% interval -> {out}, {table}, {figure}"
+        f"casa calibrate: {predictive['inside'].mean():.0%} of the people's cell summaries "
+        f"inside the fitted model's 90% interval -> {out}, {table}, {figure}"
     )
+    for row in predictive[~predictive["inside"]].itertuples():
+        print(
+            f"  outside: {row.task} {row.method} {row.summary}: people {row.people:.3g}, "
+            f"fitted operators {row.simulated_low:.3g}-{row.simulated_high:.3g}"
+        )
     return 0
 
 

@@ -9,7 +9,8 @@ A JSON object (docs/calibration.md, "The population file"):
 ``population``
     The population to draw simulated participants from, in the shape of the config's
     ``simulation.population``: each lognormal parameter's ``median`` and ``sigma``, and
-    ``max_keys``.
+    ``max_keys``; intermittent control's ``bout``, ``pause`` and ``planning`` when they were
+    fitted (the predictive operator's).
 ``posterior``
     ``parameters`` (names), ``prior_log_bounds`` (``[low, high]`` of each log-median) and
     ``log_median_samples`` (one row per posterior sample).
@@ -28,6 +29,7 @@ import jsonschema
 
 from casa_core.config import ConfigError
 from casa_core.io.atomic import atomic_write_text
+from casa_core.vocabulary import INTERMITTENT_PARAMETERS
 
 FORMAT = "casa-operator-population"
 VERSION = 1
@@ -61,7 +63,7 @@ SCHEMA = {
             "additionalProperties": False,
             "required": [*LOGNORMAL, "max_keys"],
             "properties": {
-                **{name: _LOGNORMAL for name in LOGNORMAL},
+                **{name: _LOGNORMAL for name in (*LOGNORMAL, *INTERMITTENT_PARAMETERS)},
                 "max_keys": {
                     "type": "object",
                     "additionalProperties": False,

@@ -26,6 +26,10 @@ BOUT = 1.0
 #: (Ferrell 1965); planning a factor 3 either side of the Keystroke-Level Model's
 #: M = 1.35 s (Card, Moran & Newell 1980).
 INTERMITTENT_PRIORS = {"bout": (1 / 3, 3.0), "pause": (0.1, 3.0), "planning": (0.45, 4.05)}
+#: Spread (lognormal sigma) between people of each intermittent parameter when a fitted
+#: population sets its median and the config no spread: that of the population's other
+#: chosen duration, ``lapse_duration`` (docs/departures.md).
+INTERMITTENT_SIGMA = 0.3
 
 
 @dataclass(frozen=True)

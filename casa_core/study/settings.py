@@ -177,8 +177,8 @@ def configured_population(simulation: Mapping) -> Population:
 
     The fitted population of ``operator_population`` (a `casa calibrate` file,
     :func:`casa_core.io.population.read_population`) when set, else ``population``. A
-    fitted population takes intermittent control (which `casa calibrate` does not fit, and
-    simulates as ``population`` sets it) from ``population``.
+    fitted population takes the intermittent control it does not set (a fit of the
+    lookahead operator, which has none) from ``population``.
     """
     path = simulation.get("operator_population")
     if path is None:
@@ -187,7 +187,11 @@ def configured_population(simulation: Mapping) -> Population:
 
     fitted = read_population(path)["population"]
     configured = simulation["population"]
-    unfitted = {name: configured[name] for name in INTERMITTENT_PARAMETERS if name in configured}
+    unfitted = {
+        name: configured[name]
+        for name in INTERMITTENT_PARAMETERS
+        if name in configured and name not in fitted
+    }
     return Population.from_config({**fitted, **unfitted})
 
 

@@ -17,6 +17,7 @@ import json
 import pandas as pd
 import pytest
 
+from casa_core.calibration.summaries import SUMMARIES
 from casa_core.cli import main
 from casa_core.config import load_config
 from casa_core.io import read_trial
@@ -112,7 +113,8 @@ def recorded(tmp_path_factory):
     plan = [("known_goal", method, None) for method in ("NA", "PBA", "CASA")]
     plan.append(("unknown_goal", "CASA", "after_learning"))
     for task, method, phase in plan:
-        keys = ScriptedKeys([(0.4, ["x+"]), (3.0, ["x+", "y+"]), (5.0, [])])
+        # A first press after 1 s, as people make it (no operator presses at once).
+        keys = ScriptedKeys([(1.0, []), (0.4, ["x+"]), (3.0, ["x+", "y+"]), (1.6, [])])
         result = run_trial(
             scene,
             task,
@@ -139,11 +141,14 @@ def test_a_recorded_dataset_gives_a_population_a_predictive_table_and_a_figure(c
     assert document["format"] == "casa-operator-population" and document["version"] == 1
     assert document["dataset"] == "mylab" and document["usable_simulations"] >= 10
     samples = document["posterior"]["log_median_samples"]
-    assert len(samples) == 1000 and len(samples[0]) == 6
+    # Nine medians: the six lognormal parameters and the predictive operator's bout,
+    # pause and planning (the config's operator).
+    assert len(samples) == 1000 and len(samples[0]) == 9
+    assert document["posterior"]["parameters"][-3:] == ["bout", "pause", "planning"]
     table = pd.read_csv(calibrated.with_name("population_predictive.csv"), keep_default_na=False)
     # The three known-goal trials (NA, PBA, CASA) are fitted; the learned one is left out.
     assert sorted(set(table["method"])) == ["CASA", "NA", "PBA"]
-    assert set(table["task"]) == {"known_goal"} and len(table) == 3 * 6
+    assert set(table["task"]) == {"known_goal"} and len(table) == 3 * len(SUMMARIES)
     assert (table["simulated_low"] <= table["simulated_high"]).all()
     assert calibrated.with_name("population_predictive.png").stat().st_size > 10_000
 
@@ -226,15 +231,29 @@ def test_the_study_draws_its_participants_from_a_population_file(calibrated, tmp
     fitted = read_population(calibrated)["population"]
     assert settings.population.deadband.median == fitted["deadband"]["median"]
     assert settings.population.deadband.sigma == 0.25  # the study's spread
-    assert settings.population.pause is None  # the config sets no intermittent control
-    # Intermittent control is not fitted: it comes from the config, as calibrate simulated it.
+    # Intermittent control was fitted with the rest, and the file's values win over the
+    # config's; a file without them (a fit of the lookahead operator) takes the config's.
+    assert settings.population.pause.median == fitted["pause"]["median"]
+    assert settings.population.pause.sigma == 0.3  # INTERMITTENT_SIGMA: the config sets none
     overlay.write_text(
         f"simulation:\n  operator_population: {calibrated}\n"
         "  population:\n    pause: {median: 0.5, sigma: 0.3}\n",
         encoding="utf-8",
     )
     settings = StudySettings.from_config(load_config("config/config.yaml", overlay))
-    assert settings.population.pause.median == 0.5
+    assert settings.population.pause.median == fitted["pause"]["median"]
+    document = json.loads(calibrated.read_text())
+    for name in ("bout", "pause", "planning"):
+        del document["population"][name]
+    lookahead = tmp_path / "lookahead.json"
+    lookahead.write_text(json.dumps(document | {"operator": "lookahead"}))
+    overlay.write_text(
+        f"simulation:\n  operator_population: {lookahead}\n"
+        "  population:\n    pause: {median: 0.5, sigma: 0.3}\n",
+        encoding="utf-8",
+    )
+    settings = StudySettings.from_config(load_config("config/config.yaml", overlay))
+    assert settings.population.pause.median == 0.5 and settings.population.bout is None
     assert settings.population.deadband.median == fitted["deadband"]["median"]
 
 
