@@ -20,7 +20,7 @@ from casa_core.calibration.design import People
 from casa_core.calibration.simulator import Simulator, simulate_many, with_medians
 from casa_core.calibration.summaries import cell_means, summary_labels
 from casa_core.study.settings import LOGNORMAL_PARAMETERS, Population
-from casa_core.vocabulary import INTERMITTENT_PARAMETERS, METHODS
+from casa_core.vocabulary import METHODS
 
 #: Posterior samples kept in the population file.
 POSTERIOR_SAMPLES = 1000
@@ -201,14 +201,18 @@ def predictive_table(people: People, predicted: np.ndarray, mask: np.ndarray) ->
 
 
 def population_document(result: Calibration, *, operator: str, seed: int) -> dict:
-    """The population file's document (:mod:`casa_core.io.population`) of a calibration."""
+    """The population file's document (:mod:`casa_core.io.population`) of a calibration.
+
+    Its population holds the six lognormal parameters and the intermittent control that
+    was fitted, none that was not (a lookahead fit's config may set some: the config keeps
+    them).
+    """
     from casa_core.io.population import FORMAT, VERSION
 
     population = result.population
     block: dict = {
         name: {"median": getattr(population, name).median, "sigma": getattr(population, name).sigma}
-        for name in (*LOGNORMAL_PARAMETERS, *INTERMITTENT_PARAMETERS)
-        if getattr(population, name) is not None
+        for name in dict.fromkeys((*LOGNORMAL_PARAMETERS, *result.parameters))
     }
     block["max_keys"] = {
         "values": list(population.max_keys.values),

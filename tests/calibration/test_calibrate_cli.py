@@ -300,3 +300,33 @@ def test_a_dataset_of_one_trial_is_refused_naming_the_rule(recorded, tmp_path, c
     assert main(["calibrate", str(one), "--out", str(tmp_path / "p.json"), *SMALL]) == 2
     assert "1 human trial(s) the simulator can run" in capsys.readouterr().err
     assert not (tmp_path / "p.json").exists()
+
+
+def test_a_population_file_holds_the_fitted_parameters_only():
+    from dataclasses import replace
+
+    import numpy as np
+
+    from casa_core.calibration.calibrate import Calibration, population_document
+    from casa_core.study.settings import LOGNORMAL_PARAMETERS, Lognormal
+
+    config = StudySettings.from_config(load_config("config/config.yaml")).population
+    # The population simulated with: a config's pause, and a bout and planning besides.
+    simulated = replace(config, pause=Lognormal(0.5, 0.3), bout=Lognormal(1, 0.3))
+    simulated = replace(simulated, planning=Lognormal(1, 0.3))
+    for parameters in (LOGNORMAL_PARAMETERS, (*LOGNORMAL_PARAMETERS, "bout", "pause", "planning")):
+        n = len(parameters)
+        result = Calibration(
+            "lab",
+            parameters,
+            np.zeros((n, 2)),
+            np.zeros((1, n)),
+            simulated,
+            pd.DataFrame(),
+            ("NA",),
+            1,
+            1,
+        )
+        block = population_document(result, operator="predictive", seed=1)["population"]
+        # A lookahead fit (six parameters) writes no intermittent control: the config's.
+        assert list(block) == [*parameters, "max_keys"]

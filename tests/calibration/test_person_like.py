@@ -1,14 +1,15 @@
 """`casa calibrate` fits a person who drives as the authors' recorded person did.
 
 The dataset is written by hand: two Known Goal trials without assistance, one a
-participant, whose keys are a fixed script, not an operator model. The script drives the straight path of our layout's
-Known Goal one key at a time (y, x, z, as a person lines the arm up axis by axis) in
-bouts of 1-1.6 s, with waits of 1.1-1.8 s between them, a first press after 1.4-1.9 s
-and a wait at the end, so 0.3-0.8 presses per second: the pattern of the person in the
-authors' sessions (presses 0.2-0.8 a second, a key held on 16-71 % of the ticks, first
-press after 0.7-3.3 s). The fit must find operators of the intermittent family that
-produce it: every posterior draw kept inside the prior, and the predictive table holding
-the person's value of every summary beside the simulated interval.
+participant, whose keys are a fixed script, not an operator model. The script drives the
+straight path of our layout's Known Goal one key at a time (y, x, z, as a person lines
+the arm up axis by axis) in holds of 1.1-1.6 s, with waits of 1.1-1.8 s between them, a
+first press after 1.4-1.9 s and a wait at the end, so 0.3-0.8 presses per second: the
+pattern of the person in the authors' sessions (presses 0.2-0.8 a second, a key held on
+16-71 % of the ticks, first press after 0.7-3.3 s). The fit must find operators of the
+intermittent family that produce it: every posterior draw kept inside the prior, and the
+predictive table holding the person's value of every summary beside the simulated
+interval.
 """
 
 from __future__ import annotations
