@@ -165,12 +165,19 @@ def unreached(
     for j in np.flatnonzero(mask).tolist():
         column = x[:, j][np.isfinite(x[:, j])]
         if len(column) and not column.min() <= observed[j] <= column.max():
-            task, method, name = labels[j]
-            out.append(
-                f"{task} {method} {name}: people {observed[j]:.3g}, "
-                f"operators {column.min():.3g}-{column.max():.3g}"
-            )
+            out.append(beside(*labels[j], observed[j], column.min(), column.max()))
     return out
+
+
+def beside(
+    task: str, method: str, summary: str, people: float, low: float, high: float, *, whose=""
+) -> str:
+    """One summary of the people beside the operators' range, as messages name it.
+
+    >>> beside("a", "NA", "gap", 9.0, 5.0, 6.0, whose="fitted ")
+    'a NA gap: people 9, fitted operators 5-6'
+    """
+    return f"{task} {method} {summary}: people {people:.3g}, {whose}operators {low:.3g}-{high:.3g}"
 
 
 def predictive_table(people: People, predicted: np.ndarray, mask: np.ndarray) -> pd.DataFrame:

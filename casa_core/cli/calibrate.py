@@ -98,15 +98,17 @@ def _calibrate(args) -> int:
     if result is None:
         return 2
     table, figure = _write(out, result, people, settings, args.seed)
+    from casa_core.calibration.calibrate import beside
+
     predictive = result.predictive
     print(
         f"casa calibrate: {predictive['inside'].mean():.0%} of the people's cell summaries "
         f"inside the fitted model's 90% interval -> {out}, {table}, {figure}"
     )
     for row in predictive[~predictive["inside"]].itertuples():
+        where = (row.task, row.method, row.summary, row.people)
         print(
-            f"  outside: {row.task} {row.method} {row.summary}: people {row.people:.3g}, "
-            f"fitted operators {row.simulated_low:.3g}-{row.simulated_high:.3g}"
+            "  outside: " + beside(*where, row.simulated_low, row.simulated_high, whose="fitted ")
         )
     return 0
 

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from casa_core.analysis import effort
 from casa_core.calibration.summaries import SUMMARIES
 from casa_core.cli import main
 from casa_core.io import read_trial
@@ -86,8 +87,8 @@ def person(tmp_path_factory):
 def test_the_hand_written_person_drives_as_the_recorded_person_did(person):
     for path in sorted(person.glob("P0*/*.json")):
         _, frame = read_trial(path)
-        held = [cell.split() for cell in frame["keys"]]
-        presses = sum(1 for a, b in zip([[]] + held, held, strict=False) if b and not a)
+        held = effort.held_keys(frame["keys"])
+        presses = effort.presses(held)  # the paper's effort
         duration = float(frame["t"].iloc[-1])
         assert 0.3 <= presses / duration <= 0.8, (path, presses, duration)
         assert max(len(keys) for keys in held) == 1  # one key at a time
