@@ -1,4 +1,4 @@
-"""``casa simulate``: one participant of the simulated study, one workflow job per call."""
+"""``casa simulate``: participants of the simulated study, one workflow job per call."""
 
 from __future__ import annotations
 
@@ -20,13 +20,18 @@ def register(commands) -> None:
         help="simulate one participant of the study (one stage, or the whole protocol)",
         description="One stage of one simulated participant, as the workflow runs it "
         "(workflow/rules/study.smk; the workflow chains the stages), or its whole protocol "
-        "in one call (protocol: the files of before, learn of each unknown task and after; "
-        "workflow/rules/power.smk).",
+        "in one call (protocol: the files of before, learn of each unknown task and after), "
+        "of one participant or of several in turn, paying the process's start-up once "
+        "(workflow/rules/power.smk: a replicate's participants): then every path holds "
+        "{p}, which is replaced by each participant's number.",
         **example(
             "casa simulate before --participant 1 --out data/raw/simulated/p1/before",
             "casa simulate protocol --participant 1 --before raw/p1/before --library intents/p1 \\",
             "    --rows learning/p1_unknown_goal.csv learning/p1_unknown_skill.csv \\",
             "    --out raw/p1/after",
+            "casa simulate protocol --participant 1 2 3 --before 'raw/p{p}/before' \\",
+            "    --library 'intents/p{p}' --rows 'learning/p{p}_unknown_goal.csv' \\",
+            "    'learning/p{p}_unknown_skill.csv' --out 'raw/p{p}/after'",
         ),
     )
     command.add_argument(
@@ -40,9 +45,10 @@ def register(commands) -> None:
     command.add_argument(
         "--participant",
         type=positive_int,
-        default=1,
+        nargs="+",
+        default=[1],
         metavar="INDEX",
-        help="1-based participant number",
+        help="1-based participant number; protocol: one or more, the paths then holding {p}",
     )
     _add_learning_tables(command)
     command.add_argument(
@@ -108,12 +114,48 @@ def _simulate(args) -> int:
                     file=sys.stderr,
                 )
                 return 2
+        if problem := _participant_paths_problem(args):
+            print(f"casa simulate protocol: {problem}", file=sys.stderr)
+            return 2
+    elif len(args.participant) > 1:
+        print(
+            f"casa simulate {args.stage}: takes one --participant (protocol takes several)",
+            file=sys.stderr,
+        )
+        return 2
     try:
         return _run_stage(args)
     except (LogError, OSError, ValueError) as error:
         # A damaged intent file (LibraryError, a ValueError) or log names itself and its rule.
         print(f"casa simulate {args.stage}: {error}", file=sys.stderr)
         return 2
+
+
+#: The placeholder of a participant's number in the paths of a protocol of several.
+PARTICIPANT_FIELD = "{p}"
+
+
+def _participant_paths_problem(args) -> str | None:
+    """Why the protocol's paths cannot keep each participant's files apart, or None."""
+    paths = {"--before": [args.before], "--out": [args.out], "--library": [args.library]}
+    paths |= {"--rows": args.rows, "--timing-rows": args.timing_rows}
+    if len(set(args.participant)) != len(args.participant):
+        return f"--participant names a participant twice: {args.participant}"
+    if len(args.participant) == 1:
+        return None
+    for option, values in paths.items():
+        for value in values:
+            if PARTICIPANT_FIELD not in value:
+                return (
+                    f"{option} {value}: with several participants every path holds "
+                    f"{PARTICIPANT_FIELD}, the participant's number, so that their files "
+                    "stay apart"
+                )
+    return None
+
+
+def _for_participant(path: str, number: int) -> str:
+    return path.replace(PARTICIPANT_FIELD, str(number))
 
 
 def _run_stage(args) -> int:
@@ -139,13 +181,18 @@ def _run_stage(args) -> int:
         return 0
     config, scene = load_workflow_config(args)
     settings = StudySettings.from_config(config)
-    index = args.participant - 1
+    if args.stage == "protocol":
+        runs = [_protocol(args, number, scene, settings=settings) for number in args.participant]
+        written = [(sum(run[i][0] for run in runs), what) for i, (_, what) in enumerate(runs[0])]
+        ids = ", ".join(simulate.participant_id(number - 1) for number in args.participant)
+        who = "participants" if len(runs) > 1 else "participant"
+        print(f"casa simulate protocol: {who} {ids}, {counted(written)} written")
+        return 0
+    index = args.participant[0] - 1
     pid = simulate.participant_id(index)
     # What the stage wrote, each count named: a trial is a .json and a .csv.
     written: list[tuple[int, str]]
-    if args.stage == "protocol":
-        written = _protocol(args, index, scene, settings=settings)
-    elif args.stage == "before":
+    if args.stage == "before":
         trials = simulate.simulate_before_learning(
             index, scene, settings=settings, out_dir=Path(args.out)
         )
@@ -179,8 +226,10 @@ def _run_stage(args) -> int:
     return 0
 
 
-def _protocol(args, index: int, scene: Scene, *, settings) -> list[tuple[int, str]]:
-    """``casa simulate protocol``: every folder is filled aside and renamed when all are done.
+def _protocol(args, number: int, scene: Scene, *, settings) -> list[tuple[int, str]]:
+    """``casa simulate protocol`` of participant ``number`` (1-based), its paths with
+    :data:`PARTICIPANT_FIELD` replaced: every folder is filled aside and renamed when all
+    are done.
 
     Returns what was written, each count named (:func:`casa_core.cli._options.counted`).
     """
@@ -192,20 +241,24 @@ def _protocol(args, index: int, scene: Scene, *, settings) -> list[tuple[int, st
     from casa_core.io.contract import SURVEYS_NAME
     from casa_core.study import simulate
 
+    def path(template: str) -> Path:
+        return Path(_for_participant(template, number))
+
     tasks = vocabulary.UNKNOWN_TASKS
-    folders = [Path(args.before), Path(args.out), *(Path(args.library) / task for task in tasks)]
+    library = path(args.library)
+    folders = [path(args.before), path(args.out), *(library / task for task in tasks)]
     with atomic_folders(*folders) as (before, after, *libraries):
         run = simulate.simulate_protocol(
-            index,
+            number - 1,
             scene,
             settings=settings,
             before_dir=before,
             after_dir=after,
             libraries=dict(zip(tasks, libraries, strict=True)),
         )
-    tables = [*zip(args.rows, run.rows, strict=True)]
+    tables = [*zip(map(path, args.rows), run.rows, strict=True)]
     if args.timing_rows:
-        tables += zip(args.timing_rows, run.timings, strict=True)
+        tables += zip(map(path, args.timing_rows), run.timings, strict=True)
     for path, row in tables:
         write_csv(path, pd.DataFrame([row]))
     trials = len(run.before) + len(run.after)

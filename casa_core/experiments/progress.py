@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from datetime import timedelta
 from pathlib import Path
 
-from casa_core.experiments.power import power_sizes, power_variants
+from casa_core.experiments.power import power_variants
 from casa_core.experiments.robustness import variant_names
 
 #: Where the jobs' benchmark files go, one folder per target (workflow/rules/*.smk).
@@ -42,10 +42,11 @@ INTERIM = Path("data/interim")
 #: The targets that report progress and the word for their units.
 UNIT_WORDS = {"power": "replicates", "robustness": "variants"}
 #: The benchmark of a simulated participant's one job, its whole protocol
-#: (workflow/rules/robustness.smk and power.smk): ``p<participant>_protocol``.
+#: (workflow/rules/robustness.smk): ``p<participant>_protocol``.
 PARTICIPANT_JOB = "protocol"
-#: The benchmarks of a power replicate's jobs besides its participants': tables, detections.
-REPLICATE_JOBS = ("process", "detect")
+#: The benchmarks of a power replicate's jobs (workflow/rules/power.smk): its participants'
+#: protocols, one job, its tables and its detections.
+REPLICATE_JOBS = ("participants", "process", "detect")
 #: The benchmarks of a robustness variant's jobs besides its participants': tables,
 #: statistics, the case study, the claims.
 VARIANT_JOBS = ("process", "stats", "case_study", "claims")
@@ -164,15 +165,14 @@ def target_units(config: Mapping, target: str) -> dict[str, tuple[str, ...]]:
     --------
     >>> from casa_core.config import DEFAULT_CONFIG, load_config
     >>> units = target_units(load_config(DEFAULT_CONFIG), "power")
-    >>> len(units), len(units["default/r1"]), units["default/r1"][-3:]
-    (200, 26, ('p24_protocol', 'process', 'detect'))
+    >>> len(units), units["default/r1"]
+    (200, ('participants', 'process', 'detect'))
     >>> len(target_units(load_config(DEFAULT_CONFIG), "robustness")["paper"])  # 11 and 4
     15
     """
     if target == "power":
-        jobs = participant_jobs(max(power_sizes(config))) + REPLICATE_JOBS
         replicates = range(1, config["power"]["replicates"] + 1)
-        return {f"{v}/r{r}": jobs for v in power_variants(config) for r in replicates}
+        return {f"{v}/r{r}": REPLICATE_JOBS for v in power_variants(config) for r in replicates}
     if target == "robustness":
         jobs = participant_jobs(config["robustness"]["participants"]) + VARIANT_JOBS
         return {name: jobs for name in variant_names(config)}

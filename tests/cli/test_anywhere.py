@@ -103,12 +103,12 @@ def test_progress_reads_a_workflow_elsewhere_with_its_own_unit_configs(elsewhere
     config = workflow / "data" / "interim" / "power" / "default" / "r1" / "config.yaml"
     config.parent.mkdir(parents=True)
     config.write_text("{}\n", encoding="utf-8")
-    for job in ("p1_protocol", "p2_protocol", "process", "detect"):
+    for job in ("participants", "process", "detect"):
         _benchmark(workflow / "benchmarks" / "power" / "default" / "r1" / f"{job}.tsv", 1000.0)
     args = ["progress", "power", "--config", str(DEFAULT_CONFIG), "--config", str(overlay)]
     args += ["--benchmarks", str(workflow / "benchmarks")]
     assert main(args) == 0, capsys.readouterr().err
-    assert capsys.readouterr().out.startswith("power: 0/1 replicates done (0/4 jobs)")
+    assert capsys.readouterr().out.startswith("power: 0/1 replicates done (0/3 jobs)")
     os.utime(config, (500.0, 500.0))  # the config older: the benchmarks count
     assert main(args) == 0
-    assert capsys.readouterr().out.startswith("power: 1/1 replicates done (4/4 jobs)")
+    assert capsys.readouterr().out.startswith("power: 1/1 replicates done (3/3 jobs)")

@@ -334,10 +334,10 @@ def test_progress_counts_units_and_estimates_the_time_left(tmp_path):
 
 def test_the_units_of_each_target_and_their_jobs():
     ci = load_config(CONFIG, CI)
-    # A replicate: 1 job per participant (its whole protocol) x 3, its tables and its
+    # A replicate: 1 job for its 3 participants' protocols, its tables and its
     # detections; a robustness variant: 1 job per participant x 2, its tables,
     # statistics, case study and claims.
-    replicate = ("p1_protocol", "p2_protocol", "p3_protocol", "process", "detect")
+    replicate = ("participants", "process", "detect")
     variant = ("p1_protocol", "p2_protocol", "process", "stats", "case_study", "claims")
     assert progress.target_units(ci, "power") == {"default/r1": replicate, "default/r2": replicate}
     assert progress.target_units(ci, "robustness") == {
@@ -352,15 +352,15 @@ def test_the_units_of_each_target_and_their_jobs():
 def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)  # the units' configs are looked for below data/interim
     config = _overlay(tmp_path, {"power": {"sizes": [2], "replicates": 2}})
-    # A replicate of 2 participants: 1 job each, its tables, its detections (4 jobs).
-    for i, job in enumerate(("p1_protocol", "p2_protocol", "process", "detect")):
+    # A replicate of 2 participants: 1 job for both, its tables, its detections (3 jobs).
+    for i, job in enumerate(("participants", "process", "detect")):
         _benchmark(tmp_path / "b" / "power" / "default" / "r1" / f"{job}.tsv", 5.0, 1000.0 + i)
     log = tmp_path / "progress.log"
     args = ["progress", "power", "--config", str(CONFIG), "--config", config]
     args += ["--benchmarks", str(tmp_path / "b"), "--done", "default/r1", "--append", str(log)]
     assert main(args) == 0
     line = capsys.readouterr().out
-    assert line.startswith("power: 1/2 replicates done (4/8 jobs); 20 s of job time")
+    assert line.startswith("power: 1/2 replicates done (3/6 jobs); 15 s of job time")
     assert line.rstrip().endswith("(just done: default/r1)")
     assert log.read_text().split(" ", 1)[1] == line
 
@@ -371,16 +371,19 @@ def test_the_progress_command_prints_and_logs_a_line(tmp_path, capsys, monkeypat
 @pytest.mark.pipeline
 def test_a_dry_run_gives_each_replicate_its_jobs_seed_and_files(tmp_path):
     repo, jobs, counts = dry_run(tmp_path, "power")
-    # ci.yaml: sizes 2, 3 and 2 replicates: 3 participants per replicate, one job each.
-    assert counts["power_participant"] == 6
-    assert not {"power_before", "power_learn", "power_after"} & set(counts.index)
+    # ci.yaml: sizes 2, 3 and 2 replicates: 3 participants per replicate, one job for all.
+    assert counts["power_participants"] == 2
+    assert not {"power_participant", "power_before", "power_learn"} & set(counts.index)
     for job in jobs:
-        if job["rule"] == "power_participant":
-            # Its participant's before and after logs, an intent library, a learning row
+        if job["rule"] == "power_participants":
+            # Each participant's before and after logs, an intent library, a learning row
             # and a timing row per unknown task: the robustness target's job's files.
-            p = job["shell"].split("--participant ")[1].split()[0]
-            assert len(job["output"]) == 2 + 3 * len(UNKNOWN_TASKS), job
-            assert all(f"/p{p}/" in path or f"/p{p}_" in path for path in job["output"]), job
+            assert "--participant 1 2 3 " in job["shell"], job
+            assert len(job["output"]) == 3 * (2 + 3 * len(UNKNOWN_TASKS)), job
+            for p in (1, 2, 3):
+                assert f"/raw/p{p}/before" in " ".join(job["output"]), job
+                assert f"/learning/p{p}_unknown_skill_timing.csv" in " ".join(job["output"])
+            assert "/raw/p{p}/before" in job["shell"], job  # filled in by casa
     assert counts["power_process"] == counts["power_detect"] == counts["power_progress"] == 2
     assert counts["power_table"] == counts["power_figure"] == 1
     for job in jobs:

@@ -171,6 +171,65 @@ def test_the_protocol_writes_the_bytes_of_the_three_stages(tmp_path):
                                       other.drop(columns="train_seconds"))  # fmt: skip
 
 
+def _protocols_args(root, participants: list[int]) -> list[str]:
+    """Several participants' protocols in one call, each path with {p}."""
+    rows = [str(root / "learning" / f"p{{p}}_{task}.csv") for task in UNKNOWN_TASKS]
+    timings = [str(root / "learning" / f"p{{p}}_{task}_timing.csv") for task in UNKNOWN_TASKS]
+    return [
+        "simulate", "protocol", *STAGE_OPTIONS, "--participant", *map(str, participants),
+        "--before", str(root / "raw" / "p{p}" / "before"),
+        "--library", str(root / "intents" / "p{p}"), "--rows", *rows,
+        "--timing-rows", *timings, "--out", str(root / "raw" / "p{p}" / "after"),
+    ]  # fmt: skip
+
+
+def test_several_protocols_in_one_call_write_the_bytes_of_one_call_each(tmp_path, capsys):
+    # The power target's job: a replicate's participants in one process, in turn. Each
+    # participant's files are those of its own call, whatever ran before it in the
+    # process (here participant 3 first), but for the measured training times.
+    from casa_core.cli import main
+
+    together = tmp_path / "together"
+    assert main(_protocols_args(together, [3, 2])) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("casa simulate protocol: participants p03, p02, "), out
+    trials = 2 * (10 + 2 * SETTINGS.demonstrations + 2)  # before and after learning
+    assert f" {trials} trial(s), 4 learned intent(s), 2 surveys.csv and 8 table(s)" in out, out
+    for p in (2, 3):
+        alone = tmp_path / f"alone{p}"
+        assert main(_protocol_args(alone, participant=p)) == 0
+        mine = {
+            name: content
+            for name, content in _files(together).items()
+            if f"/p{p}/" in f"/{name}" or f"/p{p}_" in name
+        }
+        theirs = {
+            name.replace("raw/", f"raw/p{p}/").replace("intents/", f"intents/p{p}/")
+            .replace("learning/", f"learning/p{p}_"): content
+            for name, content in _files(alone).items()
+        }  # fmt: skip
+        assert sorted(mine) == sorted(theirs) and len(mine) > 20
+        for name, content in theirs.items():
+            if not name.endswith("_timing.csv"):
+                assert mine[name] == content, name
+
+
+def test_several_protocols_need_a_participant_field_in_every_path(tmp_path, capsys):
+    from casa_core.cli import main
+
+    args = _protocols_args(tmp_path, [1, 2])
+    fixed = args.index("--out") + 1
+    assert main([*args[:fixed], str(tmp_path / "after")]) == 2
+    err = capsys.readouterr().err
+    assert f"--out {tmp_path / 'after'}: with several participants every path holds {{p}}" in err
+    assert main(_protocols_args(tmp_path, [1, 1])) == 2
+    assert "--participant names a participant twice: [1, 1]" in capsys.readouterr().err
+    before = ["simulate", "before", *STAGE_OPTIONS, "--participant", "1", "2", "--out", "x"]
+    assert main(before) == 2
+    assert "casa simulate before: takes one --participant" in capsys.readouterr().err
+    assert not tmp_path.exists() or not any(tmp_path.iterdir())
+
+
 def test_the_protocol_refuses_missing_or_miscounted_outputs(tmp_path, capsys):
     from casa_core.cli import main
 

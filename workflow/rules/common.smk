@@ -373,6 +373,15 @@ casa_power.replicate_seeds(config["simulation"]["seed"], len(POWER_REPLICATES))
 REPLICATE = POWER_INTERIM / "{variant}" / "r{r}"
 REPLICATE_BENCHMARKS = POWER_BENCHMARKS / "{variant}" / "r{r}"
 REPLICATE_LOGS = "logs/power/{variant}/r{r}"
+
+
+def replicate_path(*parts):
+    """A path below the replicate's folder, for params: {p} stays for casa to fill in."""
+    return lambda wildcards: shlex.quote(
+        str(POWER_INTERIM / wildcards.variant / f"r{wildcards.r}" / Path(*parts))
+    )
+
+
 # Each variant's config for the power target, computed once (replicates differ in seed).
 POWER_VARIANT_CONFIGS = {
     name: casa_power.power_variant_config(config, name) for name in POWER_VARIANTS

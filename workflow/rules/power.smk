@@ -1,40 +1,81 @@
 # `snakemake --cores all power`: simulated power of H1-H3 (docs/power.md). For each
 # variant of power.variants and each replicate r of power.replicates, the simulated
 # study with its own seed (casa_core.experiments.power.replicate_seed) and as many participants as
-# the largest N of power.sizes; its study of N is its first N participants. Each
-# participant's whole protocol is one job, the robustness target's (casa simulate
-# protocol), so that the DAG spreads over a cluster one participant a job. Logs, intents
-# and the steps table are temporary: a replicate keeps its trials.csv and detections.csv.
-# Not part of the default target.
-use rule robustness_participant as power_participant with:
+# the largest N of power.sizes; its study of N is its first N participants. A replicate's
+# participants are one job (casa simulate protocol of each in turn, the robustness
+# target's files), so that it pays one process's start-up rather than one a
+# participant; the replicates spread over the cores or a cluster. Logs, intents and the
+# steps table are temporary: a replicate keeps its trials.csv and detections.csv. Not
+# part of the default target.
+rule power_participants:
     input:
         config=replicate_config_input,
         scene=power_scene_input,
         population=OPERATOR_POPULATION,
     output:
-        before=temp(directory(REPLICATE / "raw" / "p{p}" / "before")),
-        after=temp(directory(REPLICATE / "raw" / "p{p}" / "after")),
+        before=temp(
+            directory(
+                expand(
+                    REPLICATE / "raw" / "p{p}" / "before",
+                    p=POWER_PARTICIPANTS,
+                    allow_missing=True,
+                )
+            )
+        ),
+        after=temp(
+            directory(
+                expand(
+                    REPLICATE / "raw" / "p{p}" / "after",
+                    p=POWER_PARTICIPANTS,
+                    allow_missing=True,
+                )
+            )
+        ),
         libraries=temp(
             directory(
                 expand(
                     REPLICATE / "intents" / "p{p}" / "{task}",
+                    p=POWER_PARTICIPANTS,
                     task=UNKNOWN_TASKS,
                     allow_missing=True,
                 )
             )
         ),
         rows=expand(
-            REPLICATE / "learning" / "p{p}_{task}.csv", task=UNKNOWN_TASKS, allow_missing=True
+            REPLICATE / "learning" / "p{p}_{task}.csv",
+            p=POWER_PARTICIPANTS,
+            task=UNKNOWN_TASKS,
+            allow_missing=True,
         ),
         timings=expand(
             REPLICATE / "learning" / "p{p}_{task}_timing.csv",
+            p=POWER_PARTICIPANTS,
             task=UNKNOWN_TASKS,
             allow_missing=True,
         ),
     log:
-        f"{REPLICATE_LOGS}/p{{p}}_protocol.log",
+        f"{REPLICATE_LOGS}/participants.log",
     benchmark:
-        REPLICATE_BENCHMARKS / "p{p}_protocol.tsv"
+        REPLICATE_BENCHMARKS / "participants.tsv"
+    conda:
+        "../envs/casa.yaml"
+    params:
+        participants=" ".join(map(str, POWER_PARTICIPANTS)),
+        before=replicate_path("raw", "p{p}", "before"),
+        after=replicate_path("raw", "p{p}", "after"),
+        library=replicate_path("intents", "p{p}"),
+        rows=lambda wildcards: " ".join(
+            replicate_path("learning", f"p{{p}}_{task}.csv")(wildcards) for task in UNKNOWN_TASKS
+        ),
+        timings=lambda wildcards: " ".join(
+            replicate_path("learning", f"p{{p}}_{task}_timing.csv")(wildcards)
+            for task in UNKNOWN_TASKS
+        ),
+    shell:
+        "exec casa simulate protocol --config {input.config} "
+        "--participant {params.participants} --before {params.before} "
+        "--library {params.library} --rows {params.rows} --timing-rows {params.timings} "
+        "--out {params.after} > {log} 2>&1"
 
 
 use rule robustness_process as power_process with:
