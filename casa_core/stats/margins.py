@@ -97,6 +97,21 @@ class Margins:
     def fraction_for(self, task: str, metric: str) -> float | None:
         return self.fractions.get(f"{task}:{metric}", self.fractions.get(metric))
 
+    def margin_in(self, data, task: str, metric: str, reference: str) -> tuple[float | None, str]:
+        """The margin for ``task`` and ``metric`` in the compared cells ``data`` (columns
+        ``method`` and ``metric``) and how it was set, for a note: a fraction's margin is
+        that fraction of the mean of ``reference``'s cells (None if that mean is not
+        positive)."""
+        absolute = self.absolute_for(task, metric)
+        if absolute is not None:
+            return absolute, ""
+        fraction = self.fraction_for(task, metric)
+        cells = data.loc[data["method"] == reference, metric]
+        if fraction is None or cells.empty or not np.isfinite(cells.mean()) or cells.mean() <= 0:
+            return None, ""
+        margin = fraction * float(cells.mean())
+        return margin, f"margin {fraction:g} x mean({reference}) = {margin:.4g}"
+
 
 def parse_margin(text: str, what: str = "--margin") -> tuple[str, float]:
     """``"metric=value"`` or ``"task:metric=value"`` as ``(key, value)``, or a clear error.

@@ -14,6 +14,7 @@ a participant-condition is one observation.  :mod:`casa_core.stats.apa` renders 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -51,6 +52,8 @@ POOLED = "+".join(UNKNOWN_TASKS)
 #: Level order: the CASA family first, so Tukey pairs and comparisons read "CASA vs NA".
 CONDITION_ORDER = sorted(CONDITIONS, key=lambda c: not c.startswith("CASA"))
 ALPHA = 0.05
+#: No margin, and no note of how it was set.
+NONE = (None, "")
 #: Appended to the note of every H4 row computed from a model's answers.
 MODEL_OUTPUT_NOTE = "answers are model output (simulated participants), not people's ratings"
 
@@ -126,28 +129,13 @@ def _subset(cells: pd.DataFrame, tasks: list[str], conditions: list[str]) -> pd.
     return chosen
 
 
-def _margin(margins: Margins | None, data, task: str, metric: str, reference: str):
-    """The margin for ``task`` and ``metric`` and how it was set (for the note)."""
-    if margins is None:
-        return None, ""
-    absolute = margins.absolute_for(task, metric)
-    if absolute is not None:
-        return absolute, ""
-    fraction = margins.fraction_for(task, metric)
-    cells = data.loc[data["method"] == reference, metric]
-    if fraction is None or cells.empty or not np.isfinite(cells.mean()) or cells.mean() <= 0:
-        return None, ""
-    margin = fraction * float(cells.mean())
-    return margin, f"margin {fraction:g} x mean({reference}) = {margin:.4g}"
-
-
 def _objective(
-    out: Rows, hyp, task_label, metric, data, conditions, covariate, margins, noninf=None
+    out: Rows, hyp, task_label, metric, data, conditions, covariate, margins, noninf=None, **how
 ) -> None:
     """The paper's test and its repeated-measures counterparts on one subset of cells."""
     key = {"hypothesis": hyp, "task": task_label, "metric": metric}
     first = len(out.rows)
-    _objective_rows(out, key, metric, data, conditions, covariate, margins, noninf)
+    _objective_rows(out, key, metric, data, conditions, covariate, margins, noninf, **how)
     if metric == "relative_effort" and _constant(data, "NA", metric):
         for row in out.rows[first:]:
             if row["analysis"] != "noninferiority":  # non_inferiority says so itself
@@ -169,10 +157,10 @@ def _constant(data: pd.DataFrame, condition: str, metric: str) -> bool:
     return len(values) > 1 and float(np.ptp(values)) == 0.0
 
 
-def _objective_rows(out, key, metric, data, conditions, covariate, margins, noninf) -> None:
+def _objective_rows(out, key, metric, data, conditions, covariate, margins, noninf, **how):
     task_label = key["task"]
     if metric == LOG_EFFORT:
-        _within_rows(out, key, metric, data, covariate)
+        _within_rows(out, key, metric, data, covariate, **how)
         return
     if covariate:
         ancova = key | {"analysis": "ancova"}
@@ -188,10 +176,12 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
             else between.tukey_hsd(data, metric, "method")
         )
         out.tukey(key | {"analysis": "tukey"}, pairs)
-    _within_rows(out, key, metric, data, covariate)
+    _within_rows(out, key, metric, data, covariate, **how)
     if noninf is not None:
         new, reference = noninf
-        margin, why = _margin(margins, data, task_label, metric, reference)
+        margin, why = (
+            NONE if margins is None else margins.margin_in(data, task_label, metric, reference)
+        )
         alpha = margins.alpha if margins is not None else ALPHA
         level = LEVEL_NOTE.format(alpha)
         # The paper's pooled test first: stats.claims reads the first independent row.
@@ -226,12 +216,14 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
                 )
 
 
-def _within_rows(out, key, metric, data, covariate) -> None:
+def _within_rows(out, key, metric, data, covariate, *, mixed_models: bool = True) -> None:
     """The within-subjects tests: repeated-measures ANOVA and the mixed model."""
     factors = ["method", "task"] if covariate else "method"
     out.repeated(
         key | {"analysis": "rm_anova"}, within.rm_anova(data, metric, factors, "participant")
     )
+    if not mixed_models:
+        return
     mixed = within.mixedlm(data, metric, factors, "participant")
     out.terms(key | {"analysis": "mixedlm"}, mixed, "F", "none")
     # The likelihood ratio of the same model, beside the reported small-sample F.
@@ -245,6 +237,7 @@ def analyze_study(
     *,
     margins: Margins | Mapping[str, float] | None = None,
     metrics: Sequence[str] = tuple(METRICS),
+    mixed_models: bool = True,
 ) -> pd.DataFrame:
     """Every analysis of hypotheses H1-H4, in the paper's form and the within-subjects form.
 
@@ -262,6 +255,10 @@ def analyze_study(
         non-inferiority rows report the bound only (the paper's numbers).
     metrics : sequence of str
         The trials-table columns to analyse, by default all four (each must exist).
+    mixed_models : bool
+        Fit the mixed models (the ``mixedlm`` and ``mixedlm_lrt`` rows). False leaves
+        those rows out, for a caller that reads none of them: the power target's
+        detections (:mod:`casa_core.stats.power`), where they are most of the time.
 
     Returns
     -------
@@ -336,10 +333,11 @@ def analyze_study(
         margins = Margins(absolute=dict(margins))
     cells_by_metric = _prepare_trials(trials, list(metrics))
     out = Rows()
+    objective = functools.partial(_objective, mixed_models=mixed_models)
     for metric, cells in cells_by_metric.items():
         known = [KNOWN_TASK]
         h1 = sorted(TASK_CONDITIONS[KNOWN_TASK])
-        _objective(
+        objective(
             out,
             "H1",
             KNOWN_TASK,
@@ -352,9 +350,9 @@ def analyze_study(
         )
         misspecified = list(UNKNOWN_TASKS)
         h2 = [CASA_BEFORE_LEARNING, "NA", "PBA"]
-        _objective(out, "H2", POOLED, metric, _subset(cells, misspecified, h2), h2, True, margins)
+        objective(out, "H2", POOLED, metric, _subset(cells, misspecified, h2), h2, True, margins)
         for task in misspecified:
-            _objective(
+            objective(
                 out,
                 "H2",
                 task,
@@ -366,9 +364,9 @@ def analyze_study(
                 noninf=(CASA_BEFORE_LEARNING, "NA"),
             )
         h3 = [CASA_AFTER_LEARNING, "NA"]
-        _objective(out, "H3", POOLED, metric, _subset(cells, misspecified, h3), h3, True, margins)
+        objective(out, "H3", POOLED, metric, _subset(cells, misspecified, h3), h3, True, margins)
         for task in misspecified:
-            _objective(out, "H3", task, metric, _subset(cells, [task], h3), h3, False, margins)
+            objective(out, "H3", task, metric, _subset(cells, [task], h3), h3, False, margins)
     if likert is not None:
         first = len(out.rows)
         _subjective(out, likert)

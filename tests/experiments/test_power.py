@@ -156,6 +156,26 @@ def test_the_wrong_direction_is_not_a_detection():
     assert table[table["hypothesis"] == "H1"]["detected"].all()
 
 
+def test_the_detections_read_no_mixed_model_so_skipping_them_changes_none():
+    # The detections analyse without the mixed models (most of their time): the table is
+    # the full one less its mixedlm rows, and every hypothesis's checks are the same on
+    # both, on a study whose noise leaves some checks passed and some not.
+    from casa_core.stats import _claim_tests as checks
+    from casa_core.stats.study import analyze_study
+
+    study = study_trials(6, noise=0.6, seed=3)
+    full = analyze_study(study, margins=margins(), metrics=list(METRICS))
+    lean = analyze_study(study, margins=margins(), metrics=list(METRICS), mixed_models=False)
+    mixed = full["analysis"].isin(["mixedlm", "mixedlm_lrt"])
+    assert mixed.sum() > 0 and not lean["analysis"].isin(["mixedlm", "mixedlm_lrt"]).any()
+    pd.testing.assert_frame_equal(lean, full[~mixed].reset_index(drop=True))
+    outcomes = set()
+    for judge in (checks.h1_checks, checks.h2_checks, checks.h3_checks):
+        assert judge(lean, study) == judge(full, study)
+        outcomes |= {check.passed for check in judge(full, study)}
+    assert outcomes == {True, False}
+
+
 def test_the_study_of_n_is_the_first_n_participants():
     trials = study_trials(12)
     chosen = first_participants(trials, 10)
