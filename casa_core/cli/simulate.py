@@ -183,10 +183,10 @@ def _run_stage(args) -> int:
     settings = StudySettings.from_config(config)
     if args.stage == "protocol":
         runs = [_protocol(args, number, scene, settings=settings) for number in args.participant]
-        written = [(sum(run[i][0] for run in runs), what) for i, (_, what) in enumerate(runs[0])]
+        total = [(sum(run[i][0] for run in runs), what) for i, (_, what) in enumerate(runs[0])]
         ids = ", ".join(simulate.participant_id(number - 1) for number in args.participant)
         who = "participants" if len(runs) > 1 else "participant"
-        print(f"casa simulate protocol: {who} {ids}, {counted(written)} written")
+        print(f"casa simulate protocol: {who} {ids}, {counted(total)} written")
         return 0
     index = args.participant[0] - 1
     pid = simulate.participant_id(index)
@@ -241,12 +241,12 @@ def _protocol(args, number: int, scene: Scene, *, settings) -> list[tuple[int, s
     from casa_core.io.contract import SURVEYS_NAME
     from casa_core.study import simulate
 
-    def path(template: str) -> Path:
+    def own(template: str) -> Path:
         return Path(_for_participant(template, number))
 
     tasks = vocabulary.UNKNOWN_TASKS
-    library = path(args.library)
-    folders = [path(args.before), path(args.out), *(library / task for task in tasks)]
+    library = own(args.library)
+    folders = [own(args.before), own(args.out), *(library / task for task in tasks)]
     with atomic_folders(*folders) as (before, after, *libraries):
         run = simulate.simulate_protocol(
             number - 1,
@@ -256,9 +256,9 @@ def _protocol(args, number: int, scene: Scene, *, settings) -> list[tuple[int, s
             after_dir=after,
             libraries=dict(zip(tasks, libraries, strict=True)),
         )
-    tables = [*zip(map(path, args.rows), run.rows, strict=True)]
+    tables = [*zip(map(own, args.rows), run.rows, strict=True)]
     if args.timing_rows:
-        tables += zip(map(path, args.timing_rows), run.timings, strict=True)
+        tables += zip(map(own, args.timing_rows), run.timings, strict=True)
     for path, row in tables:
         write_csv(path, pd.DataFrame([row]))
     trials = len(run.before) + len(run.after)
