@@ -41,15 +41,12 @@ BENCHMARKS = Path("benchmarks")
 INTERIM = Path("data/interim")
 #: The targets that report progress and the word for their units.
 UNIT_WORDS = {"power": "replicates", "robustness": "variants"}
-#: The benchmark of a simulated participant's one job, its whole protocol
-#: (workflow/rules/robustness.smk): ``p<participant>_protocol``.
-PARTICIPANT_JOB = "protocol"
 #: The benchmarks of a power replicate's jobs (workflow/rules/power.smk): its participants'
 #: protocols, one job, its tables and its detections.
 REPLICATE_JOBS = ("participants", "process", "detect")
-#: The benchmarks of a robustness variant's jobs besides its participants': tables,
-#: statistics, the case study, the claims.
-VARIANT_JOBS = ("process", "stats", "case_study", "claims")
+#: The benchmarks of a robustness variant's jobs (workflow/rules/robustness.smk): its
+#: participants' protocols, one job, its tables, statistics, case study and claims.
+VARIANT_JOBS = ("participants", "process", "stats", "case_study", "claims")
 
 
 @dataclass(frozen=True)
@@ -147,17 +144,6 @@ def read_progress(
     )
 
 
-def participant_jobs(participants: int) -> tuple[str, ...]:
-    """The benchmarks of the jobs of simulated participants 1 to ``participants``.
-
-    Examples
-    --------
-    >>> participant_jobs(2)
-    ('p1_protocol', 'p2_protocol')
-    """
-    return tuple(f"p{p}_{PARTICIPANT_JOB}" for p in range(1, participants + 1))
-
-
 def target_units(config: Mapping, target: str) -> dict[str, tuple[str, ...]]:
     """The units of ``target`` (``power`` or ``robustness``) and their jobs' benchmarks.
 
@@ -167,15 +153,14 @@ def target_units(config: Mapping, target: str) -> dict[str, tuple[str, ...]]:
     >>> units = target_units(load_config(DEFAULT_CONFIG), "power")
     >>> len(units), units["default/r1"]
     (200, ('participants', 'process', 'detect'))
-    >>> len(target_units(load_config(DEFAULT_CONFIG), "robustness")["paper"])  # 11 and 4
-    15
+    >>> target_units(load_config(DEFAULT_CONFIG), "robustness")["paper"]
+    ('participants', 'process', 'stats', 'case_study', 'claims')
     """
     if target == "power":
         replicates = range(1, config["power"]["replicates"] + 1)
         return {f"{v}/r{r}": REPLICATE_JOBS for v in power_variants(config) for r in replicates}
     if target == "robustness":
-        jobs = participant_jobs(config["robustness"]["participants"]) + VARIANT_JOBS
-        return {name: jobs for name in variant_names(config)}
+        return {name: VARIANT_JOBS for name in variant_names(config)}
     raise ValueError(f"progress: no target {target!r} (targets: {', '.join(UNIT_WORDS)})")
 
 

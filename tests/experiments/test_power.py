@@ -355,10 +355,10 @@ def test_progress_counts_units_and_estimates_the_time_left(tmp_path):
 def test_the_units_of_each_target_and_their_jobs():
     ci = load_config(CONFIG, CI)
     # A replicate: 1 job for its 3 participants' protocols, its tables and its
-    # detections; a robustness variant: 1 job per participant x 2, its tables,
-    # statistics, case study and claims.
+    # detections; a robustness variant: 1 job for its 2 participants' protocols, its
+    # tables, statistics, case study and claims.
     replicate = ("participants", "process", "detect")
-    variant = ("p1_protocol", "p2_protocol", "process", "stats", "case_study", "claims")
+    variant = ("participants", "process", "stats", "case_study", "claims")
     assert progress.target_units(ci, "power") == {"default/r1": replicate, "default/r2": replicate}
     assert progress.target_units(ci, "robustness") == {
         "default": variant,

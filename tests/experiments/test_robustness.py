@@ -152,9 +152,9 @@ def dry_run(tmp_path, target: str):
 @pytest.mark.pipeline
 def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
     repo, jobs, counts = dry_run(tmp_path, "robustness")
-    # ci.yaml: 3 variants x 2 participants, one job each (its whole protocol).
-    assert counts["robustness_participant"] == 6
-    assert not {"robustness_before", "robustness_learn", "robustness_after"} & set(counts.index)
+    # ci.yaml: 3 variants x 2 participants, one job per variant (their whole protocols).
+    assert counts["robustness_participants"] == 3
+    assert not {"robustness_participant", "robustness_before"} & set(counts.index)
     assert counts["robustness_process"] == counts["robustness_claims"] == 3
     assert counts["robustness_case_study"] == 3
     assert counts["robustness_table"] == 1
@@ -171,12 +171,15 @@ def test_a_dry_run_gives_each_variant_its_own_jobs_config_and_files(tmp_path):
         "authors": "config/scene-original.yaml",
     }
     for job in jobs:
-        if job["rule"] == "robustness_participant":
-            # The participant's before and after logs, an intent library, a learning row
-            # and a timing row per unknown task, all kept.
-            p = job["shell"].split("--participant ")[1].split()[0]
-            assert len(job["output"]) == 2 + 3 * len(UNKNOWN_TASKS), job
-            assert all(f"/p{p}/" in path or f"/p{p}_" in path for path in job["output"]), job
+        if job["rule"] == "robustness_participants":
+            # Each participant's before and after logs, an intent library, a learning row
+            # and a timing row per unknown task, all kept; {p} filled in by casa.
+            assert "--participant 1 2 " in job["shell"], job
+            assert len(job["output"]) == 2 * (2 + 3 * len(UNKNOWN_TASKS)), job
+            for p in (1, 2):
+                assert f"/raw/p{p}/after" in " ".join(job["output"]), job
+                assert f"/learning/p{p}_unknown_goal.csv" in " ".join(job["output"]), job
+            assert "/raw/p{p}/before" in job["shell"], job
         if job["rule"] == "robustness_table":
             continue
         for name in ("default", "original"):

@@ -327,6 +327,21 @@ VARIANTS = casa_variants.variant_names(config)
 ROBUST_INTERIM = Path("data/interim/robustness")
 ROBUST = PROCESSED / "robustness"
 ROBUST_PARTICIPANTS = list(range(1, config["robustness"]["participants"] + 1))
+
+
+def participant_path(folder, *parts):
+    """For params: ``folder / parts``, ``folder``'s wildcards filled in and {p} left for
+    casa simulate protocol to fill in with each participant's number, quoted."""
+    return lambda wildcards: shlex.quote(str(Path(str(folder).format(**wildcards)) / Path(*parts)))
+
+
+def participant_paths(folder, *templates):
+    """For params: :func:`participant_path` of each template, space-separated."""
+    return lambda wildcards: " ".join(
+        participant_path(folder, template)(wildcards) for template in templates
+    )
+
+
 VARIANT_SETTINGS = {name: casa_variants.variant_config(config, name) for name in VARIANTS}
 VARIANT_CONFIGS = {
     name: effective_config_file(ROBUST_INTERIM / name / "config.yaml", settings)
@@ -373,13 +388,6 @@ casa_power.replicate_seeds(config["simulation"]["seed"], len(POWER_REPLICATES))
 REPLICATE = POWER_INTERIM / "{variant}" / "r{r}"
 REPLICATE_BENCHMARKS = POWER_BENCHMARKS / "{variant}" / "r{r}"
 REPLICATE_LOGS = "logs/power/{variant}/r{r}"
-
-
-def replicate_path(*parts):
-    """A path below the replicate's folder, for params: {p} stays for casa to fill in."""
-    return lambda wildcards: shlex.quote(
-        str(POWER_INTERIM / wildcards.variant / f"r{wildcards.r}" / Path(*parts))
-    )
 
 
 # Each variant's config for the power target, computed once (replicates differ in seed).

@@ -2,12 +2,12 @@
 # variant of power.variants and each replicate r of power.replicates, the simulated
 # study with its own seed (casa_core.experiments.power.replicate_seed) and as many participants as
 # the largest N of power.sizes; its study of N is its first N participants. A replicate's
-# participants are one job (casa simulate protocol of each in turn, the robustness
-# target's files), so that it pays one process's start-up rather than one a
-# participant; the replicates spread over the cores or a cluster. Logs, intents and the
+# participants are one job, the robustness target's (casa simulate protocol of each in
+# turn), so that it pays one process's start-up rather than one a participant; the
+# replicates spread over the cores or a cluster. Logs, intents and the
 # steps table are temporary: a replicate keeps its trials.csv and detections.csv. Not
 # part of the default target.
-rule power_participants:
+use rule robustness_participants as power_participants with:
     input:
         config=replicate_config_input,
         scene=power_scene_input,
@@ -57,25 +57,17 @@ rule power_participants:
         f"{REPLICATE_LOGS}/participants.log",
     benchmark:
         REPLICATE_BENCHMARKS / "participants.tsv"
-    conda:
-        "../envs/casa.yaml"
     params:
         participants=" ".join(map(str, POWER_PARTICIPANTS)),
-        before=replicate_path("raw", "p{p}", "before"),
-        after=replicate_path("raw", "p{p}", "after"),
-        library=replicate_path("intents", "p{p}"),
-        rows=lambda wildcards: " ".join(
-            replicate_path("learning", f"p{{p}}_{task}.csv")(wildcards) for task in UNKNOWN_TASKS
+        before=participant_path(REPLICATE, "raw", "p{p}", "before"),
+        after=participant_path(REPLICATE, "raw", "p{p}", "after"),
+        library=participant_path(REPLICATE, "intents", "p{p}"),
+        rows=participant_paths(
+            REPLICATE, *(f"learning/p{{p}}_{task}.csv" for task in UNKNOWN_TASKS)
         ),
-        timings=lambda wildcards: " ".join(
-            replicate_path("learning", f"p{{p}}_{task}_timing.csv")(wildcards)
-            for task in UNKNOWN_TASKS
+        timings=participant_paths(
+            REPLICATE, *(f"learning/p{{p}}_{task}_timing.csv" for task in UNKNOWN_TASKS)
         ),
-    shell:
-        "exec casa simulate protocol --config {input.config} "
-        "--participant {params.participants} --before {params.before} "
-        "--library {params.library} --rows {params.rows} --timing-rows {params.timings} "
-        "--out {params.after} > {log} 2>&1"
 
 
 use rule robustness_process as power_process with:

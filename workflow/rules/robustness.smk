@@ -10,36 +10,65 @@
 ROBUST_BENCHMARKS = BENCHMARKS / "robustness"
 
 
-# Each participant's protocol: the simulated study's rule (study.smk) on the variant's config.
-use rule simulated_participant as robustness_participant with:
+# A variant's participants are one job: casa simulate protocol of each in turn (the
+# simulated study's job of study.smk, one participant after the other), so that a
+# variant pays one process's start-up rather than one a participant. The power
+# target's replicates run the same rule (power.smk).
+VARIANT = ROBUST_INTERIM / "{variant}"
+
+
+rule robustness_participants:
     input:
         config=variant_config_input,
         scene=variant_scene_input,
         population=OPERATOR_POPULATION,
     output:
-        before=directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "before"),
-        after=directory(ROBUST_INTERIM / "{variant}" / "raw" / "p{p}" / "after"),
+        before=directory(
+            expand(VARIANT / "raw" / "p{p}" / "before", p=ROBUST_PARTICIPANTS, allow_missing=True)
+        ),
+        after=directory(
+            expand(VARIANT / "raw" / "p{p}" / "after", p=ROBUST_PARTICIPANTS, allow_missing=True)
+        ),
         libraries=directory(
             expand(
-                ROBUST_INTERIM / "{variant}" / "intents" / "p{p}" / "{task}",
+                VARIANT / "intents" / "p{p}" / "{task}",
+                p=ROBUST_PARTICIPANTS,
                 task=UNKNOWN_TASKS,
                 allow_missing=True,
             )
         ),
         rows=expand(
-            ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}.csv",
+            VARIANT / "learning" / "p{p}_{task}.csv",
+            p=ROBUST_PARTICIPANTS,
             task=UNKNOWN_TASKS,
             allow_missing=True,
         ),
         timings=expand(
-            ROBUST_INTERIM / "{variant}" / "learning" / "p{p}_{task}_timing.csv",
+            VARIANT / "learning" / "p{p}_{task}_timing.csv",
+            p=ROBUST_PARTICIPANTS,
             task=UNKNOWN_TASKS,
             allow_missing=True,
         ),
     log:
-        "logs/robustness/{variant}/p{p}_protocol.log",
+        "logs/robustness/{variant}/participants.log",
     benchmark:
-        ROBUST_BENCHMARKS / "{variant}" / "p{p}_protocol.tsv"
+        ROBUST_BENCHMARKS / "{variant}" / "participants.tsv"
+    conda:
+        "../envs/casa.yaml"
+    params:
+        participants=" ".join(map(str, ROBUST_PARTICIPANTS)),
+        before=participant_path(VARIANT, "raw", "p{p}", "before"),
+        after=participant_path(VARIANT, "raw", "p{p}", "after"),
+        library=participant_path(VARIANT, "intents", "p{p}"),
+        rows=participant_paths(VARIANT, *(f"learning/p{{p}}_{task}.csv" for task in UNKNOWN_TASKS)),
+        timings=participant_paths(
+            VARIANT, *(f"learning/p{{p}}_{task}_timing.csv" for task in UNKNOWN_TASKS)
+        ),
+    shell:
+        "exec casa simulate protocol --config {input.config} "
+        "--participant {params.participants} --before {params.before} "
+        "--library {params.library} --rows {params.rows} --timing-rows {params.timings} "
+        "--out {params.after} > {log} 2>&1"
 
 
 rule robustness_process:

@@ -15,7 +15,8 @@ wildcard_constraints:
 
 # Each participant's whole protocol is one job (casa simulate protocol: before learning,
 # learning each unknown task's intent, after learning), so that each participant pays one
-# job's start-up; the robustness and power targets run the same rule on their configs.
+# job's start-up; the robustness and power targets run a variant's or a replicate's
+# participants in one job of the same command (robustness.smk).
 rule simulated_participant:
     input:
         config=CONFIG_FILE,
