@@ -52,8 +52,6 @@ POOLED = "+".join(UNKNOWN_TASKS)
 #: Level order: the CASA family first, so Tukey pairs and comparisons read "CASA vs NA".
 CONDITION_ORDER = sorted(CONDITIONS, key=lambda c: not c.startswith("CASA"))
 ALPHA = 0.05
-#: No margin, and no note of how it was set.
-NONE = (None, "")
 #: Appended to the note of every H4 row computed from a model's answers.
 MODEL_OUTPUT_NOTE = "answers are model output (simulated participants), not people's ratings"
 
@@ -179,9 +177,8 @@ def _objective_rows(out, key, metric, data, conditions, covariate, margins, noni
     _within_rows(out, key, metric, data, covariate, **how)
     if noninf is not None:
         new, reference = noninf
-        margin, why = (
-            NONE if margins is None else margins.margin_in(data, task_label, metric, reference)
-        )
+        # No margins: Margins() sets none, so the rows report the bound only.
+        margin, why = (margins or Margins()).margin_in(data, task_label, metric, reference)
         alpha = margins.alpha if margins is not None else ALPHA
         level = LEVEL_NOTE.format(alpha)
         # The paper's pooled test first: stats.claims reads the first independent row.
